@@ -1,0 +1,98 @@
+#pragma once
+/// @file grid.hpp
+/// 2D log-odds occupancy grid built from the segmented cloud (paper §2.2, Fig. 4: "the grid map
+/// is constructed with the (x, y) coordinates from the obstacle portion of the point cloud").
+/// Frame: the grid lies in the x-y plane of the map frame (z up). Cell (ix, iy) covers
+/// [origin.x + ix*res, origin.x + (ix+1)*res) x [origin.y + iy*res, ...); storage is row-major
+/// with row 0 at the lowest y (ROS map_server convention before its PGM flip).
+/// A cell never observed holds NaN ("unknown"); observed cells hold clamped log-odds.
+///
+/// Thread safety: OccupancyGrid is a value type; const members may be called concurrently,
+/// update_grid() needs exclusive access to the grid and the workspace.
+#include <duet/kernels/segmentation.hpp>
+#include <duet/kernels/types.hpp>
+
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+namespace duet {
+
+class OccupancyGrid {
+ public:
+  static constexpr float kUnknown = std::numeric_limits<float>::quiet_NaN();
+
+  explicit OccupancyGrid(float resolution_m = 0.05f);
+  /// An all-unknown grid of width x height cells whose cell (0,0) starts at origin [m].
+  OccupancyGrid(float resolution_m, Eigen::Vector2f origin, int width, int height);
+
+  [[nodiscard]] float resolution() const noexcept { return res_; }
+  [[nodiscard]] Eigen::Vector2f origin() const noexcept { return origin_; }
+  [[nodiscard]] int width() const noexcept { return w_; }
+  [[nodiscard]] int height() const noexcept { return h_; }
+  [[nodiscard]] std::size_t cell_count() const noexcept { return cells_.size(); }
+  [[nodiscard]] std::span<const float> logodds() const noexcept { return cells_; }
+  [[nodiscard]] std::span<float> logodds() noexcept { return cells_; }
+  [[nodiscard]] float at(int ix, int iy) const { return cells_[index(ix, iy)]; }
+  [[nodiscard]] std::size_t index(int ix, int iy) const noexcept {
+    return static_cast<std::size_t>(iy) * static_cast<std::size_t>(w_) + static_cast<std::size_t>(ix);
+  }
+  [[nodiscard]] bool in_bounds(int ix, int iy) const noexcept {
+    return ix >= 0 && iy >= 0 && ix < w_ && iy < h_;
+  }
+  /// Cell containing world point (x, y) (may be outside the grid).
+  [[nodiscard]] Eigen::Vector2i cell_of(const Eigen::Vector2f& xy) const noexcept;
+  /// World coordinates of the centre of cell (ix, iy).
+  [[nodiscard]] Eigen::Vector2f cell_center(int ix, int iy) const noexcept;
+
+  /// Grows (never shrinks) so that [lo, hi] plus margin_cells is inside; existing cells keep
+  /// their world position. Throws duet::Error(kOutOfRange) if the grid would exceed
+  /// max_cells (default 2^28 cells = 1 GiB) or the coordinates are not finite.
+  void ensure_contains(const Eigen::Vector2f& lo, const Eigen::Vector2f& hi, int margin_cells,
+                       std::size_t max_cells = std::size_t{1} << 28);
+
+  /// Probability of occupancy per cell (1 - 1/(1+exp(l))), -1 for unknown.
+  void to_probabilities(std::span<float> out) const;
+  /// ROS nav_msgs/OccupancyGrid trinary values: 100 occupied (p >= occupied_threshold),
+  /// 0 free (p <= free_threshold), -1 unknown or in between.
+  void to_ros_trinary(std::span<std::int8_t> out, float occupied_threshold = 0.65f,
+                      float free_threshold = 0.196f) const;
+  /// Number of cells observed at least once.
+  [[nodiscard]] std::size_t known_cells() const noexcept;
+
+ private:
+  float res_;
+  Eigen::Vector2f origin_{0.0f, 0.0f};
+  int w_ = 0, h_ = 0;
+  std::vector<float> cells_;
+};
+
+struct GridUpdateSettings {
+  float hit_logodds = 0.85f;    ///< added to a cell hit by an obstacle point (p = 0.7)
+  float miss_logodds = -0.4f;   ///< added to a cell seen free (p = 0.4)
+  float min_logodds = -2.0f;    ///< clamp (p = 0.12), as OctoMap
+  float max_logodds = 3.5f;     ///< clamp (p = 0.97), as OctoMap
+  bool clear_along_rays = true; ///< free space is also cleared along each ray (DESIGN.md §7)
+  float max_ray_length_m = 8.0f;///< hits farther than this from the sensor are ignored [m]
+  int grow_margin_cells = 40;   ///< growth step around new data [cells]
+};
+
+struct GridUpdateWorkspace {
+  std::vector<std::uint64_t> hit_cells, free_cells, tmp;
+  std::vector<std::uint8_t> mask;
+};
+
+/// One scan from one sensor at sensor_xy [m]: obstacle points mark their cells occupied,
+/// floor points mark their cells free, and (clear_along_rays) every cell crossed by the 2D ray
+/// from the sensor to the cell of each obstacle or floor point is free. Each cell gets at most
+/// one update per call: hit if any obstacle point falls in it, else miss (OctoMap's
+/// computeUpdate semantics); rays run to the centre of each distinct end cell.
+/// kIgnored and non-finite points are skipped. labels has points.size() entries.
+void update_grid(OccupancyGrid& grid, const Eigen::Vector2f& sensor_xy, PointsView points,
+                 std::span<const PointLabel> labels, const GridUpdateSettings& settings,
+                 GridUpdateWorkspace& workspace);
+
+void validate(const GridUpdateSettings& settings);
+
+}  // namespace duet

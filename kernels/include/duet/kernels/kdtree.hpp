@@ -1,0 +1,70 @@
+#pragma once
+/// @file kdtree.hpp
+/// Exact nearest-neighbour search over a static 3D point set: a bucket kd-tree whose points
+/// are copied into tree order (cache locality), built in parallel with TBB.
+/// Non-finite points are not indexed and are never returned.
+///
+/// Thread safety: build() is not thread-safe with concurrent queries. After build(), knn()
+/// and radius() are const and may be called from any number of threads at once.
+/// Ties (equal distances) are broken by the smaller point index, so results are unique.
+#include <duet/kernels/types.hpp>
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace duet {
+
+struct KdTreeSettings {
+  int max_leaf_size = 12;  ///< points per leaf bucket, >= 1
+};
+
+class KdTree {
+ public:
+  KdTree() = default;
+  explicit KdTree(PointsView points, const KdTreeSettings& settings = {}) { build(points, settings); }
+
+  /// (Re)builds over `points` (copied). Throws duet::Error(kInvalidArgument) for more than
+  /// 2^31-1 points or bad settings.
+  void build(PointsView points, const KdTreeSettings& settings = {});
+
+  [[nodiscard]] std::size_t size() const noexcept { return n_input_; }
+  [[nodiscard]] std::size_t indexed_size() const noexcept { return pts_.size(); }
+
+  /// The k nearest indexed points to q, nearest first. Writes min(k, indexed_size())
+  /// entries to idx / dist2 (squared distances [m^2]) and returns that count.
+  /// idx and dist2 must hold at least k entries.
+  int knn(const Eigen::Vector3f& q, int k, std::uint32_t* idx, float* dist2) const;
+
+  /// All indexed points within `radius` (dist <= radius) of q, sorted by distance, appended to
+  /// idx (and dist2, if given). Returns the number appended.
+  std::size_t radius(const Eigen::Vector3f& q, float radius, std::vector<std::uint32_t>& idx,
+                     std::vector<float>* dist2 = nullptr) const;
+
+  /// Tree order, for cache-friendly batch queries: tree_points()[j] is the indexed point at
+  /// tree position j and order()[j] its input index.
+  [[nodiscard]] std::span<const std::uint32_t> order() const noexcept { return ids_; }
+  [[nodiscard]] std::span<const Eigen::Vector3f> tree_points() const noexcept { return pts_; }
+
+  /// As knn(), but returns tree positions (indices into tree_points()) instead of input indices.
+  int knn_tree(const Eigen::Vector3f& q, int k, std::uint32_t* tree_pos, float* dist2) const;
+
+ private:
+  struct Node {
+    // Leaf: begin/end into pts_. Inner: split dimension and value, children indices.
+    float split = 0.0f;
+    std::int32_t dim = -1;  // -1 = leaf
+    std::uint32_t a = 0;    // leaf: begin, inner: left child
+    std::uint32_t b = 0;    // leaf: end,   inner: right child
+  };
+  struct Item;
+
+  std::vector<Eigen::Vector3f> pts_;  // tree order
+  std::vector<std::uint32_t> ids_;    // tree order -> input index
+  std::vector<Node> nodes_;
+  std::size_t n_input_ = 0;
+  int leaf_size_ = 12;
+  std::uint32_t node_count_ = 0;
+};
+
+}  // namespace duet

@@ -1,0 +1,32 @@
+// The `duet` command-line program: `duet map`, `duet profile`, `duet version`.
+#include "commands.hpp"
+
+#include <duet/kernels/error.hpp>
+#include <duet/version.hpp>
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <iostream>
+
+int main(int argc, char** argv) {
+  CLI::App app{"duet: autonomous exploration and mapping with two RGB-D sensors (" DUET_VERSION_STRING ")"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", DUET_VERSION_STRING);
+  int exit_code = 0;
+  duet::app::add_map_command(app, exit_code);
+  duet::app::add_profile_command(app, exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const duet::Error& e) {
+    std::fprintf(stderr, "duet: error: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "duet: error: %s\n", e.what());
+    return 1;
+  }
+  return exit_code;
+}

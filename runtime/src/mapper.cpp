@@ -1,0 +1,126 @@
+#include <duet/kernels/error.hpp>
+#include <duet/runtime/mapper.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace duet {
+
+Mapper::Mapper(const MappingSettings& settings, const Eigen::Isometry3f& T_map_world)
+    : settings_(settings), T_map_world_(T_map_world), grid_(settings.grid_resolution_m) {
+  validate(settings_.back_projection);
+  validate(settings_.voxel_filter);
+  validate(settings_.normals);
+  validate(settings_.segmentation);
+  validate(settings_.grid_update);
+  if (!T_map_world_.matrix().allFinite()) fail(ErrorCode::kInvalidArgument, "Mapper: T_map_world is not finite");
+}
+
+void Mapper::integrate(std::span<const SensorFrame> frames, const Eigen::Isometry3f& T_world_robot) {
+  if (!T_world_robot.matrix().allFinite()) fail(ErrorCode::kInvalidArgument, "Mapper::integrate: robot pose is not finite");
+  const Eigen::Isometry3f T_map_robot = T_map_world_ * T_world_robot;
+  std::vector<SensorFrame> in_map(frames.begin(), frames.end());
+  for (auto& f : in_map) f.T_robot_camera = T_map_robot * f.T_robot_camera;  // optical -> map
+  // All frames are validated and back-projected before anything is integrated.
+  back_project(in_map, settings_.back_projection, raw_, &offsets_);
+  stats_.raw_points += raw_.size();
+  for (std::size_t i = 0; i < in_map.size(); ++i) {
+    const std::size_t b = offsets_[i], n = offsets_[i + 1] - b;
+    const PointsView pts = n ? PointsView(raw_.points[b].data(), n) : PointsView();
+    const ColorsView col = n ? ColorsView(&raw_.colors[b].r, n) : ColorsView();
+    voxel_filter(pts, col, settings_.voxel_filter, vf_ws_, filtered_);
+    stats_.filtered_points += filtered_.size();
+    const Eigen::Vector3f origin = in_map[i].T_robot_camera.translation();
+    NormalSettings ns = settings_.normals;
+    ns.viewpoint = origin;
+    estimate_normals(filtered_, ns);
+    labels_.resize(filtered_.size());
+    segment(filtered_.points_view(), filtered_.normals, settings_.segmentation, labels_);
+    for (const PointLabel l : labels_) {
+      stats_.obstacle_points += l == PointLabel::kObstacle;
+      stats_.floor_points += l == PointLabel::kFloor;
+    }
+    update_grid(grid_, origin.head<2>(), filtered_.points_view(), labels_, settings_.grid_update, grid_ws_);
+    filtered_.normals.clear();
+    filtered_.curvature.clear();
+    pending_.append(filtered_);
+    ++stats_.frames;
+  }
+  ++stats_.observations;
+  if (pending_.size() > std::max<std::size_t>(global_.size(), 2'000'000)) compact();
+}
+
+void Mapper::compact() {
+  if (pending_.empty()) return;
+  global_.append(pending_);
+  pending_.clear();
+  PointCloud merged;
+  voxel_filter(global_.points_view(), global_.colors_view(), settings_.voxel_filter, vf_ws_, merged);
+  global_ = std::move(merged);
+}
+
+const PointCloud& Mapper::cloud() {
+  compact();
+  return global_;
+}
+
+Eigen::Isometry3f gravity_alignment(const Eigen::Vector3f& up) {
+  if (!up.allFinite() || up.norm() < 1e-6f)
+    fail(ErrorCode::kInvalidArgument, "gravity_alignment: the up direction must be a finite non-zero vector");
+  Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
+  T.linear() = Eigen::Quaternionf::FromTwoVectors(up.normalized(), Eigen::Vector3f::UnitZ()).toRotationMatrix();
+  return T;
+}
+
+Eigen::Vector3f refine_up(const PointCloud& cloud, const Eigen::Vector3f& initial_up, float cone_deg) {
+  if (!initial_up.allFinite() || initial_up.norm() < 1e-6f)
+    fail(ErrorCode::kInvalidArgument, "refine_up: the initial up direction must be a finite non-zero vector");
+  Eigen::Vector3f up = initial_up.normalized();
+  if (cloud.normals.size() != cloud.size()) fail(ErrorCode::kInvalidArgument, "refine_up: the cloud needs normals");
+  for (const float cone : {cone_deg, cone_deg / 2}) {
+    const float c = std::cos(cone * std::numbers::pi_v<float> / 180.0f);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    std::size_t count = 0;
+    for (const auto& n : cloud.normals) {
+      if (!is_finite(n)) continue;
+      const float d = n.dot(up);
+      if (std::fabs(d) < c) continue;
+      sum += (d < 0 ? -n : n).cast<double>();
+      ++count;
+    }
+    if (count < 100) break;
+    up = sum.normalized().cast<float>();
+  }
+  return up;
+}
+
+float estimate_floor_z(const PointCloud& cloud, float max_tilt_deg) {
+  if (cloud.empty()) return std::numeric_limits<float>::quiet_NaN();
+  if (cloud.normals.size() != cloud.size())
+    fail(ErrorCode::kInvalidArgument, "estimate_floor_z: the cloud needs normals");
+  const float cos_tilt = std::cos(max_tilt_deg * std::numbers::pi_v<float> / 180.0f);
+  std::vector<float> z_all, z_h;
+  z_all.reserve(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const auto& p = cloud.points[i];
+    if (!is_finite(p)) continue;
+    z_all.push_back(p.z());
+    const auto& n = cloud.normals[i];
+    if (is_finite(n) && std::fabs(n.z()) >= cos_tilt) z_h.push_back(p.z());
+  }
+  if (z_all.empty()) return std::numeric_limits<float>::quiet_NaN();
+  std::sort(z_h.begin(), z_h.end());
+  const std::size_t need = std::max<std::size_t>(50, z_h.size() / 50);
+  constexpr float kBand = 0.05f;
+  for (std::size_t b = 0; b < z_h.size();) {
+    const auto e = static_cast<std::size_t>(std::upper_bound(z_h.begin() + static_cast<std::ptrdiff_t>(b), z_h.end(), z_h[b] + kBand) - z_h.begin());
+    if (e - b >= need) return z_h[b + (e - b) / 2];
+    ++b;
+  }
+  std::sort(z_all.begin(), z_all.end());
+  return z_all[z_all.size() / 100];
+}
+
+}  // namespace duet

@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Installs the Debian packages duet needs and configures + builds it.
+# Usage: scripts/setup.sh [build-dir] [extra cmake args...]
+#   As root: installs what is missing (apt-get update once, then install).
+#   Not root: prints the apt-get command to run and stops if anything is missing.
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="${1:-$here/build}"
+shift || true
+
+pkgs=(build-essential cmake pkg-config
+      libeigen3-dev libembree-dev libtbb-dev libopencv-dev libpcl-dev
+      libbenchmark-dev libgtest-dev libgmock-dev libyaml-cpp-dev libspdlog-dev libcli11-dev
+      liblzf-dev nlohmann-json3-dev libpng-dev)
+
+missing=()
+for p in "${pkgs[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  if [ "$(id -u)" = 0 ]; then
+    echo "setup: installing ${missing[*]}"
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  else
+    echo "setup: missing packages; run as root:" >&2
+    echo "  apt-get update && apt-get install -y --no-install-recommends ${missing[*]}" >&2
+    exit 1
+  fi
+fi
+
+jobs="$(nproc 2>/dev/null || echo 2)"
+cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE="${DUET_BUILD_TYPE:-Release}" "$@" >/dev/null
+cmake --build "$build" -j "$jobs"

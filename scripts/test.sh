@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Sets everything up (Debian packages, build) and runs the test suite twice:
+#   1. Release build            (build/),       ctest
+#   2. AddressSanitizer + UBSan (build-asan/),  ctest
+# Usage: scripts/test.sh            both passes
+#        DUET_SKIP_SANITIZERS=1 scripts/test.sh   only the Release pass
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+jobs="$(nproc 2>/dev/null || echo 2)"
+
+echo "== duet: Release build and tests"
+"$here/scripts/setup.sh" "$here/build"
+(cd "$here/build" && ctest --output-on-failure -j "$jobs" --timeout 900)
+
+if [ "${DUET_SKIP_SANITIZERS:-0}" != 1 ]; then
+  echo "== duet: AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
+  DUET_BUILD_TYPE=RelWithDebInfo "$here/scripts/setup.sh" "$here/build-asan" -DDUET_SANITIZE=ON -DDUET_BUILD_BENCH=OFF
+  export ASAN_OPTIONS="detect_leaks=0:abort_on_error=1:strict_string_checks=1"
+  export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+  (cd "$here/build-asan" && ctest --output-on-failure -j "$jobs" --timeout 1800)
+fi
