@@ -92,6 +92,7 @@ void KdTree::build(PointsView points, const KdTreeSettings& settings) {
           std::nth_element(items + begin, items + mid, items + end, [dim](const Item& a, const Item& b) {
             return a.p[dim] < b.p[dim] || (a.p[dim] == b.p[dim] && a.id < b.id);
           });
+          node.split = items[mid].p[dim];  // before the children reorder items[mid]
           std::uint32_t l = 0, r = 0;
           if (count > 16384) {
             tbb::parallel_invoke([&] { l = (*this)(begin, mid); }, [&] { r = (*this)(mid, end); });
@@ -100,7 +101,6 @@ void KdTree::build(PointsView points, const KdTreeSettings& settings) {
             r = (*this)(mid, end);
           }
           node.dim = dim;
-          node.split = items[mid].p[dim];
           node.a = l;
           node.b = r;
           return idx;

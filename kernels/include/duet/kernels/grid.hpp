@@ -55,9 +55,10 @@ class OccupancyGrid {
   /// Probability of occupancy per cell (1 - 1/(1+exp(l))), -1 for unknown.
   void to_probabilities(std::span<float> out) const;
   /// ROS nav_msgs/OccupancyGrid trinary values: 100 occupied (p >= occupied_threshold),
-  /// 0 free (p <= free_threshold), -1 unknown or in between.
+  /// 0 free (p <= free_threshold), -1 unknown or in between. With the defaults one hit
+  /// (p = 0.70) is occupied, one miss (p = 0.40) free, a hit and a miss (p = 0.61) unknown.
   void to_ros_trinary(std::span<std::int8_t> out, float occupied_threshold = 0.65f,
-                      float free_threshold = 0.196f) const;
+                      float free_threshold = 0.45f) const;
   /// Number of cells observed at least once.
   [[nodiscard]] std::size_t known_cells() const noexcept;
 

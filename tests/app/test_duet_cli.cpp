@@ -1,0 +1,167 @@
+// The `duet` program run as a user runs it: exit codes, outputs, and error messages.
+#include <duet/runtime/cloud_io.hpp>
+#include <duet/runtime/grid_io.hpp>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+  int code;
+  std::string output;  // stdout + stderr
+};
+
+CliRun run(const std::string& args) {
+  const std::string cmd = std::string(DUET_CLI) + " " + args + " 2>&1";
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) return {-1, "popen failed"};
+  std::string out;
+  std::array<char, 4096> buf{};
+  while (std::fgets(buf.data(), buf.size(), p)) out += buf.data();
+  const int status = pclose(p);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+fs::path data_dir() { return fs::path(DUET_DATA_DIR); }
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path d = fs::path(DUET_BINARY_DIR) / "test-app" / name;
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+#define REQUIRE_DATA(sub)                                                                   \
+  if (!fs::exists(data_dir() / (sub))) GTEST_SKIP() << "shared data not found: " << (data_dir() / (sub))
+
+void expect_map_outputs(const fs::path& out, std::size_t min_points) {
+  for (const char* f : {"cloud.pcd", "cloud.ply", "grid.yaml", "grid.pgm", "grid.png", "summary.json"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  const duet::PointCloud pcd = duet::read_pcd(out / "cloud.pcd");
+  const duet::PointCloud ply = duet::read_ply(out / "cloud.ply");
+  EXPECT_GE(pcd.size(), min_points);
+  EXPECT_EQ(pcd.size(), ply.size());
+  EXPECT_TRUE(pcd.has_colors());
+  const duet::OccupancyGrid grid = duet::read_map_server(out / "grid.yaml");
+  EXPECT_GT(grid.known_cells(), 1000u);
+  const auto summary = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(summary["frames"].get<int>(), 5);
+  EXPECT_EQ(summary["cloud_points"].get<std::size_t>(), pcd.size());
+  EXPECT_GT(summary["grid"]["occupied_cells"].get<int>(), 100);
+  EXPECT_GT(summary["grid"]["free_cells"].get<int>(), 100);
+}
+
+}  // namespace
+
+TEST(DuetCli, HelpAndVersion) {
+  const CliRun h = run("--help");
+  EXPECT_EQ(h.code, 0);
+  EXPECT_NE(h.output.find("map"), std::string::npos);
+  const CliRun v = run("--version");
+  EXPECT_EQ(v.code, 0);
+  EXPECT_FALSE(v.output.empty());
+}
+
+TEST(DuetCli, MapsSlambookFrames) {
+  REQUIRE_DATA("rgbd/slambook2_ch5");
+  const fs::path out = temp_dir("slambook");
+  const CliRun r = run("map " + (data_dir() / "rgbd/slambook2_ch5").string() + " -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("[5/5]"), std::string::npos) << r.output;  // progress line
+  expect_map_outputs(out, 10000);
+}
+
+TEST(DuetCli, Maps3DMatchFramesWithGivenUp) {
+  REQUIRE_DATA("rgbd/3dmatch_seq01");
+  const fs::path out = temp_dir("3dmatch");
+  const CliRun r = run("map " + (data_dir() / "rgbd/3dmatch_seq01").string() + " --up +y -j 1 -o " + out.string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  expect_map_outputs(out, 10000);
+}
+
+TEST(DuetCli, SameResultWithOneAndTwoThreads) {
+  REQUIRE_DATA("rgbd/slambook2_ch5");
+  const fs::path a = temp_dir("t1"), b = temp_dir("t2");
+  const std::string in = (data_dir() / "rgbd/slambook2_ch5").string();
+  ASSERT_EQ(run("map " + in + " -q -j 1 -o " + a.string()).code, 0);
+  ASSERT_EQ(run("map " + in + " -q -j 2 -o " + b.string()).code, 0);
+  const auto ca = duet::read_pcd(a / "cloud.pcd"), cb = duet::read_pcd(b / "cloud.pcd");
+  ASSERT_EQ(ca.size(), cb.size());
+  for (std::size_t i = 0; i < ca.size(); ++i) ASSERT_EQ(ca.points[i], cb.points[i]) << i;
+  const auto ga = duet::read_map_server(a / "grid.yaml"), gb = duet::read_map_server(b / "grid.yaml");
+  ASSERT_EQ(ga.width(), gb.width());
+  ASSERT_EQ(ga.height(), gb.height());
+  for (std::size_t i = 0; i < ga.cell_count(); ++i) {
+    const float x = ga.logodds()[i], y = gb.logodds()[i];
+    ASSERT_TRUE((std::isnan(x) && std::isnan(y)) || x == y) << i;
+  }
+}
+
+TEST(DuetCli, MissingFrameIsAClearError) {
+  REQUIRE_DATA("rgbd/slambook2_ch5");
+  const fs::path in = temp_dir("missing-frame");
+  fs::copy(data_dir() / "rgbd/slambook2_ch5", in, fs::copy_options::recursive);
+  fs::permissions(in, fs::perms::owner_all, fs::perm_options::add);
+  for (const auto& e : fs::recursive_directory_iterator(in))
+    fs::permissions(e.path(), fs::perms::owner_all, fs::perm_options::add);
+  fs::remove(in / "depth" / "3.pgm");
+  const CliRun r = run("map " + in.string() + " -o " + (in / "out").string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("3.pgm"), std::string::npos) << r.output;
+}
+
+TEST(DuetCli, MalformedPoseIsAClearError) {
+  REQUIRE_DATA("rgbd/slambook2_ch5");
+  const fs::path in = temp_dir("bad-pose");
+  fs::copy(data_dir() / "rgbd/slambook2_ch5", in, fs::copy_options::recursive);
+  for (const auto& e : fs::recursive_directory_iterator(in))
+    fs::permissions(e.path(), fs::perms::owner_all, fs::perm_options::add);
+  fs::permissions(in, fs::perms::owner_all, fs::perm_options::add);
+  {
+    std::ifstream f(in / "pose.txt");
+    std::string all, line;
+    int n = 0;
+    while (std::getline(f, line)) all += (++n == 2 ? std::string("1 2 three 4 5 6 7") : line) + "\n";
+    f.close();
+    std::ofstream(in / "pose.txt") << all;
+  }
+  const CliRun r = run("map " + in.string() + " -o " + (in / "out").string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("pose.txt"), std::string::npos) << r.output;
+}
+
+TEST(DuetCli, BadArgumentsAreClearErrors) {
+  const CliRun missing = run("map /nonexistent/folder");
+  EXPECT_NE(missing.code, 0);
+  EXPECT_NE(missing.output.find("/nonexistent/folder"), std::string::npos) << missing.output;
+  REQUIRE_DATA("rgbd/slambook2_ch5");
+  const CliRun up = run("map " + (data_dir() / "rgbd/slambook2_ch5").string() + " --up sideways -o " +
+                     temp_dir("bad-up").string());
+  EXPECT_NE(up.code, 0);
+  EXPECT_NE(up.output.find("--up"), std::string::npos) << up.output;
+  const CliRun floor = run("map " + (data_dir() / "rgbd/slambook2_ch5").string() + " --floor-z low -o " +
+                        temp_dir("bad-floor").string());
+  EXPECT_NE(floor.code, 0);
+  EXPECT_NE(floor.output.find("--floor-z"), std::string::npos) << floor.output;
+}
+
+TEST(DuetCli, ProfileCommand) {
+  const CliRun dual = run("profile dual");
+  EXPECT_EQ(dual.code, 0) << dual.output;
+  EXPECT_NE(dual.output.find("-0.118"), std::string::npos) << dual.output;
+  const fs::path bad = temp_dir("bad-profile") / "broken.yaml";
+  std::ofstream(bad) << "name: x\nchassis: [1, 2\n";
+  const CliRun r = run("profile " + bad.string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("broken.yaml"), std::string::npos) << r.output;
+}
