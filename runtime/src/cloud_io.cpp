@@ -3,6 +3,7 @@
 /// parsed with explicit bounds checks; declared counts are checked against the bytes actually
 /// present before any allocation that depends on them.
 #include <duet/kernels/error.hpp>
+#include "file_util.hpp"
 #include <duet/runtime/cloud_io.hpp>
 
 #include <lzf.h>
@@ -30,15 +31,15 @@
 namespace duet {
 namespace {
 
+using detail::fail_file;
+using detail::read_whole_file;
+using detail::write_file_atomically;
+
 namespace fs = std::filesystem;
 using u64 = std::uint64_t;
 
 // ------------------------------------------------------------------------------------------
 // Shared helpers: errors, whole-file read, atomic write, tokens and numbers.
-
-[[noreturn]] void fail_file(ErrorCode code, const fs::path& path, const std::string& what) {
-  fail(code, path.string() + ": " + what);
-}
 
 /// A token as it may appear in an error message: non-printable bytes escaped, long ones cut.
 std::string quote_token(std::string_view s) {
@@ -57,73 +58,6 @@ std::string quote_token(std::string_view s) {
   if (s.size() > n) out += "...";
   out += "'";
   return out;
-}
-
-std::string read_whole_file(const fs::path& path) {
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) fail_file(ErrorCode::kIo, path, "is a directory, not a file");
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) {
-    fail_file(ErrorCode::kIo, path, std::string("cannot open for reading: ") + std::strerror(errno));
-  }
-  std::string data;
-  try {
-    char buf[1 << 16];
-    if (std::fseek(f, 0, SEEK_END) == 0) {
-      const long size = std::ftell(f);
-      if (size > 0) data.reserve(static_cast<std::size_t>(size));
-      std::rewind(f);
-    }
-    for (;;) {
-      const std::size_t got = std::fread(buf, 1, sizeof buf, f);
-      data.append(buf, got);
-      if (got < sizeof buf) break;
-    }
-  } catch (const std::bad_alloc&) {
-    std::fclose(f);
-    fail_file(ErrorCode::kOutOfMemory, path, "file does not fit in memory");
-  }
-  const bool bad = std::ferror(f) != 0;
-  const int err = errno;
-  std::fclose(f);
-  if (bad) fail_file(ErrorCode::kIo, path, std::string("read error: ") + std::strerror(err));
-  return data;
-}
-
-/// Writes the concatenation of `parts` to a temporary sibling of `path`, then renames it into
-/// place: an existing file is replaced whole or not at all.
-void write_file_atomically(const fs::path& path, std::initializer_list<std::string_view> parts) {
-  static std::atomic<unsigned> counter{0};
-  fs::path tmp = path;
-  tmp += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter.fetch_add(1));
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (f == nullptr) {
-    fail_file(ErrorCode::kIo, path, std::string("cannot open for writing: ") + std::strerror(errno));
-  }
-  bool ok = true;
-  int err = 0;
-  for (const std::string_view part : parts) {
-    if (!part.empty() && std::fwrite(part.data(), 1, part.size(), f) != part.size()) {
-      ok = false;
-      err = errno;
-      break;
-    }
-  }
-  if (std::fclose(f) != 0 && ok) {
-    ok = false;
-    err = errno;
-  }
-  std::error_code ec;
-  if (!ok) {
-    fs::remove(tmp, ec);
-    fail_file(ErrorCode::kIo, path, std::string("write failed: ") + std::strerror(err));
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    std::error_code ec2;
-    fs::remove(tmp, ec2);
-    fail_file(ErrorCode::kIo, path, "cannot move the written file into place: " + ec.message());
-  }
 }
 
 void check_cloud(const fs::path& path, const PointCloud& cloud) {

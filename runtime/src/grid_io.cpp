@@ -1,6 +1,7 @@
 /// @file grid_io.cpp
 /// map_server YAML + image and PNG pictures of occupancy grids (see grid_io.hpp).
 #include <duet/kernels/error.hpp>
+#include "file_util.hpp"
 #include <duet/runtime/grid_io.hpp>
 
 #include <opencv2/core.hpp>
@@ -26,6 +27,10 @@
 namespace duet {
 namespace {
 
+using detail::fail_file;
+using detail::read_whole_file;
+using detail::write_file_atomically;
+
 namespace fs = std::filesystem;
 using u64 = std::uint64_t;
 
@@ -33,66 +38,6 @@ constexpr std::uint8_t kPgmOccupied = 0;
 constexpr std::uint8_t kPgmFree = 254;
 constexpr std::uint8_t kPgmUnknown = 205;
 constexpr u64 kMaxPixels = u64{1} << 28;
-
-[[noreturn]] void fail_file(ErrorCode code, const fs::path& path, const std::string& what) {
-  fail(code, path.string() + ": " + what);
-}
-
-std::string read_whole_file(const fs::path& path) {
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) fail_file(ErrorCode::kIo, path, "is a directory, not a file");
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) {
-    fail_file(ErrorCode::kIo, path, std::string("cannot open for reading: ") + std::strerror(errno));
-  }
-  std::string data;
-  char buf[1 << 16];
-  for (;;) {
-    const std::size_t got = std::fread(buf, 1, sizeof buf, f);
-    data.append(buf, got);
-    if (got < sizeof buf) break;
-  }
-  const bool bad = std::ferror(f) != 0;
-  const int err = errno;
-  std::fclose(f);
-  if (bad) fail_file(ErrorCode::kIo, path, std::string("read error: ") + std::strerror(err));
-  return data;
-}
-
-/// Writes the concatenation of `parts` to a temporary sibling, then renames it into place.
-void write_file_atomically(const fs::path& path, std::initializer_list<std::string_view> parts) {
-  static std::atomic<unsigned> counter{0};
-  fs::path tmp = path;
-  tmp += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter.fetch_add(1));
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (f == nullptr) {
-    fail_file(ErrorCode::kIo, path, std::string("cannot open for writing: ") + std::strerror(errno));
-  }
-  bool ok = true;
-  int err = 0;
-  for (const std::string_view part : parts) {
-    if (!part.empty() && std::fwrite(part.data(), 1, part.size(), f) != part.size()) {
-      ok = false;
-      err = errno;
-      break;
-    }
-  }
-  if (std::fclose(f) != 0 && ok) {
-    ok = false;
-    err = errno;
-  }
-  std::error_code ec;
-  if (!ok) {
-    fs::remove(tmp, ec);
-    fail_file(ErrorCode::kIo, path, std::string("write failed: ") + std::strerror(err));
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    std::error_code ec2;
-    fs::remove(tmp, ec2);
-    fail_file(ErrorCode::kIo, path, "cannot move the written file into place: " + ec.message());
-  }
-}
 
 std::string shortest(double v) {
   char buf[40];
