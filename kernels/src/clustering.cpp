@@ -108,6 +108,9 @@ std::vector<std::vector<std::uint32_t>> euclidean_clusters(PointsView points, st
                                               std::to_string(n) + " points");
       if (is_finite(points[i])) src.push_back(i);
     }
+    // A point listed twice is one point (as in PCL, which marks points processed).
+    std::sort(src.begin(), src.end());
+    src.erase(std::unique(src.begin(), src.end()), src.end());
   }
   const std::size_t m = src.size();
   if (m == 0) return {};
@@ -124,13 +127,18 @@ std::vector<std::vector<std::uint32_t>> euclidean_clusters(PointsView points, st
   // Cells of size `cell`. Sparse clouds: cell = tolerance, 26 neighbours, all pairs checked.
   // Dense clouds: cell = tolerance/sqrt(3), so a cell is a clique (its diagonal is <= tolerance)
   // and two cells need only one close pair to be joined.
+  // The extent, in tolerances, must fit 20 bits per axis (in the dense path's smaller cells it
+  // then fits 21): the three cell indices are packed into one 63-bit key.
+  for (int a = 0; a < 3; ++a) {
+    const double lo_t = static_cast<double>(lo[a]) / tol, hi_t = static_cast<double>(hi[a]) / tol;
+    if (!(std::fabs(lo_t) < 1e15) || !(std::fabs(hi_t) < 1e15) || !(hi_t - lo_t < 1048575.0))
+      fail(ErrorCode::kOutOfRange, "euclidean_clusters: coordinate range [" + std::to_string(lo[a]) + ", " +
+                                       std::to_string(hi[a]) + "] m on axis " + "xyz"[a] + " is too large: more than 2^20 tolerances of " +
+                                       std::to_string(tol) + " m");
+  }
   auto bin = [&](float cell, std::int64_t* cmin, int* bits) -> std::uint64_t {
     for (int a = 0; a < 3; ++a) {
       const double l = std::floor(static_cast<double>(lo[a]) / cell), h = std::floor(static_cast<double>(hi[a]) / cell);
-      if (!(std::fabs(l) < 1048576.0) || !(std::fabs(h) < 1048576.0))
-        fail(ErrorCode::kOutOfRange, "euclidean_clusters: coordinate range [" + std::to_string(lo[a]) + ", " +
-                                         std::to_string(hi[a]) + "] m on axis " + "xyz"[a] +
-                                         " is too large for cells of " + std::to_string(cell) + " m (|p / cell| must be < 2^20)");
       cmin[a] = static_cast<std::int64_t>(l);
       bits[a] = std::max(1, static_cast<int>(std::bit_width(static_cast<std::uint64_t>(static_cast<std::int64_t>(h) - cmin[a]))));
     }

@@ -166,37 +166,28 @@ void update_grid(OccupancyGrid& grid, const Eigen::Vector2f& sensor_xy, PointsVi
   //    (Amanatides-Woo traversal); the end cell itself is excluded.
   if (settings.clear_along_rays) {
     const Eigen::Vector2i sc = grid.cell_of(sensor_xy);
-    const float res = grid.resolution();
-    const Eigen::Vector2f org = grid.origin();
+    const double res = grid.resolution();
+    const double org_x = grid.origin().x(), org_y = grid.origin().y();
     detail::for_blocks(wn, 2048, [&](std::size_t, std::size_t begin, std::size_t end) {
       for (std::size_t w = begin; w < end; ++w) {
         if (!hit[w] && !end_free[w]) continue;
         const Eigen::Vector2i ec(c0.x() + static_cast<int>(w % static_cast<std::size_t>(bw)),
                                  c0.y() + static_cast<int>(w / static_cast<std::size_t>(bw)));
+        // Crossing times in double, from the integer cell boundary at every step (no running
+        // sums, whose round-off would step into a wrong cell near grid corners).
         const Eigen::Vector2f target = grid.cell_center(ec.x(), ec.y());
-        const Eigen::Vector2f d = target - sensor_xy;
+        const double ox = sensor_xy.x(), oy = sensor_xy.y();
+        const double dx = static_cast<double>(target.x()) - ox, dy = static_cast<double>(target.y()) - oy;
+        const int sx = dx > 0 ? 1 : -1, sy = dy > 0 ? 1 : -1;
         Eigen::Vector2i c = sc;
-        const int sx = d.x() > 0 ? 1 : -1, sy = d.y() > 0 ? 1 : -1;
-        const float inf = INFINITY;
-        const float tdx = d.x() != 0.0f ? res / std::fabs(d.x()) : inf;
-        const float tdy = d.y() != 0.0f ? res / std::fabs(d.y()) : inf;
-        const float bx = org.x() + static_cast<float>(c.x() + (sx > 0 ? 1 : 0)) * res;
-        const float by = org.y() + static_cast<float>(c.y() + (sy > 0 ? 1 : 0)) * res;
-        float tmx = d.x() != 0.0f ? (bx - sensor_xy.x()) / d.x() : inf;
-        float tmy = d.y() != 0.0f ? (by - sensor_xy.y()) / d.y() : inf;
         const int steps = std::abs(ec.x() - sc.x()) + std::abs(ec.y() - sc.y());
         for (int s = 0; s < steps && c != ec; ++s) {
           set(ray_free, win(c));
-          if (tmx < tmy) {
-            c.x() += sx;
-            tmx += tdx;
-          } else {
-            c.y() += sy;
-            tmy += tdy;
-          }
-          // Float round-off can step outside the window on a nearly diagonal ray: clamp.
-          c.x() = std::clamp(c.x(), c0.x(), c1.x());
-          c.y() = std::clamp(c.y(), c0.y(), c1.y());
+          const double tx = dx != 0.0 ? (org_x + (c.x() + (sx > 0 ? 1 : 0)) * res - ox) / dx : INFINITY;
+          const double ty = dy != 0.0 ? (org_y + (c.y() + (sy > 0 ? 1 : 0)) * res - oy) / dy : INFINITY;
+          // Never step past the end cell's row or column: the walk stays inside the window.
+          if (c.y() == ec.y() || (c.x() != ec.x() && tx < ty)) c.x() += sx;
+          else c.y() += sy;
         }
       }
     });

@@ -117,14 +117,20 @@ void KdTree::build(PointsView points, const KdTreeSettings& settings) {
   node_count_ = next.load();
   pts_.resize(m);
   ids_.resize(m);
+  xs_.resize(m);
+  ys_.resize(m);
+  zs_.resize(m);
   for (std::uint32_t i = 0; i < m; ++i) {
     pts_[i] = items[i].p;
     ids_[i] = items[i].id;
+    xs_[i] = items[i].p.x();
+    ys_[i] = items[i].p.y();
+    zs_[i] = items[i].p.z();
   }
 }
 
 int KdTree::knn_tree(const Eigen::Vector3f& q, int k, std::uint32_t* tree_pos, float* dist2) const {
-  if (k <= 0 || pts_.empty()) return 0;
+  if (k <= 0 || pts_.empty() || !is_finite(q)) return 0;
   KBest best{k, 0, dist2, tree_pos, ids_.data()};
   // Depth-first search, nearer child first; off[] holds the squared distance components from q
   // to the current cell, so mindist is the exact squared distance from q to that cell.
@@ -145,7 +151,21 @@ int KdTree::knn_tree(const Eigen::Vector3f& q, int k, std::uint32_t* tree_pos, f
     while (true) {
       const Node& nd = nodes_[ni];
       if (nd.dim < 0) {
-        for (std::uint32_t j = nd.a; j < nd.b; ++j) best.offer((pts_[j] - q).squaredNorm(), j);
+        // Distances of a whole leaf in one vectorisable loop, then the few candidates offered.
+        constexpr std::uint32_t kChunk = 32;
+        float d[kChunk];
+        for (std::uint32_t j0 = nd.a; j0 < nd.b; j0 += kChunk) {
+          const std::uint32_t m = std::min(kChunk, nd.b - j0);
+          const float* xs = xs_.data() + j0;
+          const float* ys = ys_.data() + j0;
+          const float* zs = zs_.data() + j0;
+          for (std::uint32_t t = 0; t < m; ++t) {
+            const float dx = xs[t] - q.x(), dy = ys[t] - q.y(), dz = zs[t] - q.z();
+            d[t] = dx * dx + (dy * dy + dz * dz);  // the order of Eigen's squaredNorm: identical values
+          }
+          for (std::uint32_t t = 0; t < m; ++t)
+            if (d[t] <= best.worst()) best.offer(d[t], j0 + t);
+        }
         break;
       }
       const float diff = q[nd.dim] - nd.split;
@@ -172,7 +192,7 @@ int KdTree::knn(const Eigen::Vector3f& q, int k, std::uint32_t* idx, float* dist
 
 std::size_t KdTree::radius(const Eigen::Vector3f& q, float radius, std::vector<std::uint32_t>& idx,
                            std::vector<float>* dist2) const {
-  if (pts_.empty() || !(radius >= 0.0f)) return 0;
+  if (pts_.empty() || !(radius >= 0.0f) || !is_finite(q)) return 0;
   const float r2 = radius * radius;
   std::vector<std::pair<float, std::uint32_t>> found;
   struct Frame {

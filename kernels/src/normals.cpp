@@ -49,6 +49,13 @@ bool normal_of(int count, Get&& get, Eigen::Vector3f& normal, float& curvature) 
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
   es.computeDirect(C);
   const Eigen::Vector3d ev = es.eigenvalues();  // ascending
+  // Collinear points: no plane, no normal (as PCL). computeDirect is accurate to ~sqrt(eps) of
+  // the trace for a double eigenvalue, so "zero" means below 1e-7 of the trace.
+  if (ev[1] <= 1e-7 * trace) {
+    normal.setConstant(kNaN);
+    curvature = kNaN;
+    return false;
+  }
   normal = es.eigenvectors().col(0).cast<float>().normalized();
   curvature = static_cast<float>(std::max(0.0, ev[0]) / (std::max(0.0, ev[0]) + ev[1] + ev[2]));
   return true;

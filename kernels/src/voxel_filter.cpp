@@ -4,9 +4,9 @@
 #include "parallel.hpp"
 #include "radix_sort.hpp"
 
-#include <tbb/parallel_reduce.h>
-
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 
@@ -22,7 +22,62 @@ void validate(const VoxelFilterSettings& s) {
 
 namespace {
 
-constexpr std::size_t kBlock = 1 << 14;
+using Map = detail::VoxelAccumMap;
+constexpr std::size_t kBlock = 1 << 15;
+constexpr std::uint64_t kEmpty = std::numeric_limits<std::uint64_t>::max();
+
+// floor() for |x| < 2^31 without a libm call (x86-64 baseline has no SSE4.1 round): the same
+// value as std::floor, so voxel assignment matches pcl::VoxelGrid exactly.
+inline std::int64_t fast_floor(float x) {
+  const auto i = static_cast<std::int32_t>(x);
+  return static_cast<std::int64_t>(i - (x < static_cast<float>(i) ? 1 : 0));
+}
+
+void map_reset(Map& m, std::size_t expected) {
+  const std::size_t cap = std::bit_ceil(std::max<std::size_t>(64, 2 * expected));
+  m.slot_key.assign(cap, kEmpty);
+  m.slot_index.resize(cap);
+  m.mask = cap - 1;
+  m.shift = 64 - std::countr_zero(cap);
+  m.keys.clear();
+  m.acc.clear();
+}
+
+std::uint32_t map_insert(Map& m, std::uint64_t key);
+
+void map_grow(Map& m) {
+  const std::size_t cap = 2 * m.slot_key.size();
+  m.slot_key.assign(cap, kEmpty);
+  m.slot_index.resize(cap);
+  m.mask = cap - 1;
+  m.shift = 64 - std::countr_zero(cap);
+  for (std::size_t i = 0; i < m.keys.size(); ++i) {
+    std::uint64_t h = (m.keys[i] * 0x9E3779B97F4A7C15ull) >> m.shift;
+    while (m.slot_key[h] != kEmpty) h = (h + 1) & m.mask;
+    m.slot_key[h] = m.keys[i];
+    m.slot_index[h] = static_cast<std::uint32_t>(i);
+  }
+}
+
+inline std::uint32_t map_insert(Map& m, std::uint64_t key) {
+  std::uint64_t h = (key * 0x9E3779B97F4A7C15ull) >> m.shift;
+  while (true) {
+    const std::uint64_t k = m.slot_key[h];
+    if (k == key) return m.slot_index[h];
+    if (k == kEmpty) break;
+    h = (h + 1) & m.mask;
+  }
+  if (2 * (m.keys.size() + 1) > m.slot_key.size()) {
+    map_grow(m);
+    return map_insert(m, key);
+  }
+  const auto idx = static_cast<std::uint32_t>(m.keys.size());
+  m.slot_key[h] = key;
+  m.slot_index[h] = idx;
+  m.keys.push_back(key);
+  m.acc.emplace_back();
+  return idx;
+}
 
 struct Bounds {
   Eigen::Vector3f lo{std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
@@ -58,7 +113,7 @@ void voxel_filter(PointsView points, ColorsView colors, const VoxelFilterSetting
   out.clear();
   if (n == 0) return;
 
-  // 1. Bounds of the finite points (min/max are exact, so the reduction order does not matter).
+  // 1. Bounds of the finite points (min/max are exact: the reduction order does not matter).
   const std::size_t nb = detail::block_count(n, kBlock);
   std::vector<Bounds> block_bounds(nb);
   detail::for_blocks(n, kBlock, [&](std::size_t b, std::size_t begin, std::size_t end) {
@@ -87,11 +142,12 @@ void voxel_filter(PointsView points, ColorsView colors, const VoxelFilterSetting
     const float lo = all.lo[a] * inv, hi = all.hi[a] * inv;
     constexpr float kLimit = 2147483520.0f;  // largest float below 2^31
     if (!(std::fabs(lo) < kLimit) || !(std::fabs(hi) < kLimit))
-      fail(ErrorCode::kOutOfRange, "voxel_filter: coordinate " + std::to_string(std::fabs(lo) > std::fabs(hi) ? all.lo[a] : all.hi[a]) +
+      fail(ErrorCode::kOutOfRange, "voxel_filter: coordinate " +
+                                       std::to_string(std::fabs(lo) > std::fabs(hi) ? all.lo[a] : all.hi[a]) +
                                        " m on axis " + "xyz"[a] + " is too large for a voxel index at leaf " +
                                        std::to_string(settings.leaf_size_m) + " m (|p / leaf| must be < 2^31)");
-    min_b[a] = static_cast<std::int64_t>(std::floor(lo));
-    div[a] = static_cast<std::int64_t>(std::floor(hi)) - min_b[a] + 1;
+    min_b[a] = fast_floor(lo);
+    div[a] = fast_floor(hi) - min_b[a] + 1;
   }
   std::uint64_t total = 0, dxy = 0;
   const bool overflow =
@@ -101,94 +157,92 @@ void voxel_filter(PointsView points, ColorsView colors, const VoxelFilterSetting
     fail(ErrorCode::kOutOfRange, "voxel_filter: the bounding box holds more than 2^63 voxels at leaf " +
                                      std::to_string(settings.leaf_size_m) + " m; the voxel index would overflow");
   const std::uint64_t mul_y = static_cast<std::uint64_t>(div[0]);
-  const std::uint64_t mul_z = static_cast<std::uint64_t>(div[0]) * static_cast<std::uint64_t>(div[1]);
-  const std::uint64_t invalid_key = total;  // sorts after every voxel
+  const std::uint64_t mul_z = dxy;
 
-  // 3. Keys (z-major linear voxel index, PCL's order) and sort.
-  ws.keys.resize(n);
-  ws.order.resize(n);
-  detail::for_blocks(n, kBlock, [&](std::size_t, std::size_t begin, std::size_t end) {
+  // 3. Per block: sums per voxel (key = z-major linear voxel index, PCL's order).
+  if (ws.blocks.size() < nb) ws.blocks.resize(nb);
+  detail::for_blocks(n, kBlock, [&](std::size_t b, std::size_t begin, std::size_t end) {
+    Map& m = ws.blocks[b];
+    map_reset(m, std::max<std::size_t>(m.keys.size(), 256));
+    std::uint64_t last_key = kEmpty;
+    std::uint32_t last = 0;
     for (std::size_t i = begin; i < end; ++i) {
-      const Eigen::Vector3f p = points[i];
-      ws.order[i] = static_cast<std::uint32_t>(i);
-      if (!is_finite(p)) {
-        ws.keys[i] = invalid_key;
-        continue;
+      const float* p = points.ptr(i);
+      if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) continue;
+      const auto ix = static_cast<std::uint64_t>(fast_floor(p[0] * inv) - min_b[0]);
+      const auto iy = static_cast<std::uint64_t>(fast_floor(p[1] * inv) - min_b[1]);
+      const auto iz = static_cast<std::uint64_t>(fast_floor(p[2] * inv) - min_b[2]);
+      const std::uint64_t key = ix + iy * mul_y + iz * mul_z;
+      if (key != last_key) {  // neighbouring pixels often share a voxel
+        last = map_insert(m, key);
+        last_key = key;
       }
-      const auto ix = static_cast<std::int64_t>(std::floor(p.x() * inv)) - min_b[0];
-      const auto iy = static_cast<std::int64_t>(std::floor(p.y() * inv)) - min_b[1];
-      const auto iz = static_cast<std::int64_t>(std::floor(p.z() * inv)) - min_b[2];
-      ws.keys[i] = static_cast<std::uint64_t>(ix) + static_cast<std::uint64_t>(iy) * mul_y +
-                   static_cast<std::uint64_t>(iz) * mul_z;
-    }
-  });
-  detail::radix_sort_pairs(ws.keys, ws.order, ws.keys_tmp, ws.order_tmp, invalid_key);
-
-  // 4. Segment starts (first index of each voxel run) among the finite points.
-  const std::size_t m = all.finite;  // finite points are the first m after the sort
-  const std::size_t mb = detail::block_count(m, kBlock);
-  std::vector<std::size_t> starts_in_block(mb + 1, 0);
-  detail::for_blocks(m, kBlock, [&](std::size_t b, std::size_t begin, std::size_t end) {
-    std::size_t c = 0;
-    for (std::size_t i = begin; i < end; ++i) c += (i == 0 || ws.keys[i] != ws.keys[i - 1]) ? 1 : 0;
-    starts_in_block[b + 1] = c;
-  });
-  for (std::size_t b = 0; b < mb; ++b) starts_in_block[b + 1] += starts_in_block[b];
-  const std::size_t nvox = starts_in_block[mb];
-  ws.segment_begin.resize(nvox + 1);
-  ws.segment_begin[nvox] = static_cast<std::uint32_t>(m);
-  detail::for_blocks(m, kBlock, [&](std::size_t b, std::size_t begin, std::size_t end) {
-    std::size_t o = starts_in_block[b];
-    for (std::size_t i = begin; i < end; ++i)
-      if (i == 0 || ws.keys[i] != ws.keys[i - 1]) ws.segment_begin[o++] = static_cast<std::uint32_t>(i);
-  });
-
-  // 5. Centroid and mean colour per voxel (double accumulation: exact enough for any cloud size).
-  out.points.resize(nvox);
-  if (with_color) out.colors.resize(nvox);
-  std::vector<std::uint8_t> keep;
-  const bool filter_small = settings.min_points_per_voxel > 1;
-  if (filter_small) keep.assign(nvox, 0);
-  detail::for_blocks(nvox, 4096, [&](std::size_t, std::size_t begin, std::size_t end) {
-    for (std::size_t v = begin; v < end; ++v) {
-      const std::uint32_t s = ws.segment_begin[v], e = ws.segment_begin[v + 1];
-      double sx = 0, sy = 0, sz = 0;
-      std::uint64_t r = 0, g = 0, bl = 0;
-      for (std::uint32_t j = s; j < e; ++j) {
-        const std::uint32_t i = ws.order[j];
-        const float* p = points.ptr(i);
-        sx += p[0];
-        sy += p[1];
-        sz += p[2];
-        if (with_color) {
-          const Rgb8 c = colors[i];
-          r += c.r;
-          g += c.g;
-          bl += c.b;
-        }
-      }
-      const double cnt = static_cast<double>(e - s);
-      out.points[v] = Eigen::Vector3f(static_cast<float>(sx / cnt), static_cast<float>(sy / cnt),
-                                      static_cast<float>(sz / cnt));
+      auto& a = m.acc[last];
+      a.x += p[0];
+      a.y += p[1];
+      a.z += p[2];
+      ++a.count;
       if (with_color) {
-        const std::uint64_t c = e - s;
-        out.colors[v] = Rgb8{static_cast<std::uint8_t>((r + c / 2) / c), static_cast<std::uint8_t>((g + c / 2) / c),
-                             static_cast<std::uint8_t>((bl + c / 2) / c)};
+        const std::uint8_t* c = colors.ptr(i);
+        a.r += c[0];
+        a.g += c[1];
+        a.b += c[2];
       }
-      if (filter_small) keep[v] = (e - s) >= settings.min_points_per_voxel;
     }
   });
-  if (filter_small) {
-    std::size_t o = 0;
-    for (std::size_t v = 0; v < nvox; ++v) {
-      if (!keep[v]) continue;
-      out.points[o] = out.points[v];
-      if (with_color) out.colors[o] = out.colors[v];
-      ++o;
+
+  // 4. Merge the blocks in block order (deterministic sums), then sort the distinct voxels.
+  Map* merged = &ws.blocks[0];
+  if (nb > 1) {
+    std::size_t expected = 0;
+    for (std::size_t b = 0; b < nb; ++b) expected = std::max(expected, ws.blocks[b].keys.size());
+    map_reset(ws.merged, 2 * expected);
+    for (std::size_t b = 0; b < nb; ++b) {
+      const Map& m = ws.blocks[b];
+      for (std::size_t v = 0; v < m.keys.size(); ++v) {
+        auto& dst = ws.merged.acc[map_insert(ws.merged, m.keys[v])];
+        const auto& src = m.acc[v];
+        dst.x += src.x;
+        dst.y += src.y;
+        dst.z += src.z;
+        dst.r += src.r;
+        dst.g += src.g;
+        dst.b += src.b;
+        dst.count += src.count;
+      }
     }
-    out.points.resize(o);
-    if (with_color) out.colors.resize(o);
+    merged = &ws.merged;
   }
+  const std::size_t nvox = merged->keys.size();
+  ws.keys.assign(merged->keys.begin(), merged->keys.end());
+  ws.order.resize(nvox);
+  for (std::size_t v = 0; v < nvox; ++v) ws.order[v] = static_cast<std::uint32_t>(v);
+  detail::radix_sort_pairs(ws.keys, ws.order, ws.keys_tmp, ws.order_tmp, total - 1);
+
+  // 5. Centroids and mean colours in voxel order; voxels below min_points_per_voxel dropped.
+  const auto& acc = merged->acc;
+  const std::uint32_t min_pts = settings.min_points_per_voxel;
+  std::size_t kept = nvox;
+  if (min_pts > 1) {
+    std::size_t o = 0;
+    for (std::size_t v = 0; v < nvox; ++v)
+      if (acc[ws.order[v]].count >= min_pts) ws.order[o++] = ws.order[v];
+    kept = o;
+  }
+  out.points.resize(kept);
+  if (with_color) out.colors.resize(kept);
+  detail::for_blocks(kept, 4096, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t v = begin; v < end; ++v) {
+      const auto& a = acc[ws.order[v]];
+      const double c = a.count;
+      out.points[v] = Eigen::Vector3f(static_cast<float>(a.x / c), static_cast<float>(a.y / c), static_cast<float>(a.z / c));
+      if (with_color) {
+        const std::uint64_t h = a.count / 2;
+        out.colors[v] = Rgb8{static_cast<std::uint8_t>((a.r + h) / a.count), static_cast<std::uint8_t>((a.g + h) / a.count),
+                             static_cast<std::uint8_t>((a.b + h) / a.count)};
+      }
+    }
+  });
 }
 
 void voxel_filter(PointsView points, ColorsView colors, const VoxelFilterSettings& settings, PointCloud& out) {

@@ -29,9 +29,10 @@ struct ClusteringWorkspace {
   std::vector<Eigen::Vector3f> sorted_pts;
 };
 
-/// Clusters the points of `points` selected by `subset` (all points if empty). Returned
-/// indices are indices into `points`. Non-finite points are never clustered.
-/// Throws duet::Error on bad settings or a cell index overflow (|p / tolerance| >= 2^20).
+/// Clusters the points of `points` selected by `subset` (all points if empty; an index listed
+/// twice counts once). Returned indices are indices into `points`. Non-finite points are never clustered.
+/// Throws duet::Error on bad settings, or kOutOfRange when the selected points span more than
+/// 2^20 - 1 tolerances on an axis (e.g. 104 km at 0.1 m).
 std::vector<std::vector<std::uint32_t>> euclidean_clusters(
     PointsView points, std::span<const std::uint32_t> subset, const ClusteringSettings& settings,
     ClusteringWorkspace& workspace);

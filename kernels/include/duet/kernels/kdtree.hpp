@@ -60,6 +60,7 @@ class KdTree {
   struct Item;
 
   std::vector<Eigen::Vector3f> pts_;  // tree order
+  std::vector<float> xs_, ys_, zs_;   // the same, as structure of arrays (vectorised leaf scans)
   std::vector<std::uint32_t> ids_;    // tree order -> input index
   std::vector<Node> nodes_;
   std::size_t n_input_ = 0;

@@ -6,7 +6,8 @@
 /// so it is a tangent, not a normal - we follow [30] and PCL.) The neighbourhood includes the
 /// query point itself, as in pcl::NormalEstimation. Each normal is flipped toward the
 /// viewpoint (dot(viewpoint - p, n) >= 0). curvature = l0 / (l0 + l1 + l2).
-/// Points that are not finite, or have fewer than 3 neighbours, get NaN normal and curvature.
+/// Points that are not finite, have fewer than 3 neighbours, or whose neighbours are collinear
+/// (second eigenvalue <= 1e-7 of the trace) get NaN normal and curvature.
 ///
 /// Thread safety: reentrant; parallel inside (TBB); results identical for any thread count.
 #include <duet/kernels/kdtree.hpp>

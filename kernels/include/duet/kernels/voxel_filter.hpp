@@ -10,6 +10,10 @@
 /// the bounding box) raise duet::Error(kOutOfRange): never a wrong result. (PCL prints a
 /// warning and returns the input unfiltered.)
 ///
+/// Implementation: points are cut into fixed blocks (independent of the thread count); each
+/// block sums its points per voxel in a hash map, the block maps are merged in block order, and
+/// only the distinct voxels are sorted. Sums are in double.
+///
 /// Thread safety: reentrant with one workspace per concurrent call; parallel inside (TBB).
 /// Results are identical for any thread count.
 #include <duet/kernels/types.hpp>
@@ -24,11 +28,30 @@ struct VoxelFilterSettings {
   std::uint32_t min_points_per_voxel = 1;  ///< voxels with fewer points are dropped
 };
 
+namespace detail {
+/// Open-addressing map voxel key -> running sums (internal to voxel_filter, exposed only so
+/// the workspace can keep its memory between calls).
+struct VoxelAccumMap {
+  struct Accum {
+    double x = 0, y = 0, z = 0;
+    std::uint64_t r = 0, g = 0, b = 0;
+    std::uint32_t count = 0;
+  };
+  std::vector<std::uint64_t> slot_key;
+  std::vector<std::uint32_t> slot_index;
+  std::vector<std::uint64_t> keys;  ///< distinct keys in insertion order
+  std::vector<Accum> acc;           ///< sums, parallel to keys
+  std::uint64_t mask = 0;
+  int shift = 64;
+};
+}  // namespace detail
+
 /// Reusable scratch memory: keep one per thread of calls to avoid allocation per call.
 struct VoxelFilterWorkspace {
+  std::vector<detail::VoxelAccumMap> blocks;  ///< one map per fixed block of input points
+  detail::VoxelAccumMap merged;
   std::vector<std::uint64_t> keys, keys_tmp;
   std::vector<std::uint32_t> order, order_tmp;
-  std::vector<std::uint32_t> segment_begin;
 };
 
 /// Filters `points` (and `colors`, if non-empty: must have points.size() entries) into `out`

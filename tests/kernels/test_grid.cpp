@@ -1,0 +1,517 @@
+// OccupancyGrid + update_grid vs a serial reference written from the header (one update per cell
+// per call: hit if any obstacle point, else miss if any floor point's cell or any cell crossed by a
+// ray from the sensor to an end cell's centre; exact DDA in double); growth, clamping,
+// probabilities, ROS trinary values, ignored labels, max_ray_length, errors, thread counts.
+#include "kernel_test_util.hpp"
+
+#include <duet/kernels/error.hpp>
+#include <duet/kernels/grid.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <set>
+#include <utility>
+#include <vector>
+
+namespace duet {
+namespace {
+
+using test::kInf;
+using test::kNaN;
+using Cell = std::pair<int, int>;
+
+// ---- reference -----------------------------------------------------------------------------------
+
+// Cells crossed by the segment from `from` to the centre of `end`, starting in `start`, excluding
+// `end` (exact Amanatides-Woo in double, crossing times recomputed from the boundaries each step).
+// Returns false if the walk does not reach `end` in |dx| + |dy| steps.
+bool reference_ray(const OccupancyGrid& g, const Eigen::Vector2f& from, Cell start, Cell end, std::set<Cell>& out) {
+  const double res = g.resolution();
+  const Eigen::Vector2d org = g.origin().cast<double>();
+  const Eigen::Vector2d s = from.cast<double>();
+  const Eigen::Vector2d t = g.cell_center(end.first, end.second).cast<double>();
+  const Eigen::Vector2d d = t - s;
+  const int sx = d.x() > 0 ? 1 : -1, sy = d.y() > 0 ? 1 : -1;
+  Cell c = start;
+  const int steps = std::abs(end.first - start.first) + std::abs(end.second - start.second);
+  for (int k = 0; k < steps + 1; ++k) {
+    if (c == end) return true;
+    out.insert(c);
+    const double bx = org.x() + (c.first + (sx > 0 ? 1 : 0)) * res, by = org.y() + (c.second + (sy > 0 ? 1 : 0)) * res;
+    const double tx = d.x() != 0.0 ? (bx - s.x()) / d.x() : std::numeric_limits<double>::infinity();
+    const double ty = d.y() != 0.0 ? (by - s.y()) / d.y() : std::numeric_limits<double>::infinity();
+    if (tx < ty) c.first += sx;
+    else c.second += sy;
+  }
+  return c == end;
+}
+
+struct RefStats {
+  std::size_t rays = 0, ray_failures = 0;
+};
+
+// The header's semantics on a copy of the grid (growth through the same ensure_contains, which is
+// tested on its own below).
+RefStats reference_update(OccupancyGrid& g, const Eigen::Vector2f& sensor, const std::vector<Eigen::Vector3f>& pts,
+                          const std::vector<PointLabel>& labels, const GridUpdateSettings& s) {
+  RefStats st;
+  const double max_r = s.max_ray_length_m;
+  std::vector<std::size_t> used;
+  Eigen::Vector2f lo = sensor, hi = sensor;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    if (labels[i] == PointLabel::kIgnored) continue;
+    const Eigen::Vector2f xy = pts[i].head<2>();
+    if (!xy.allFinite()) continue;
+    if ((xy - sensor).squaredNorm() > static_cast<float>(max_r * max_r)) continue;
+    used.push_back(i);
+    lo = lo.cwiseMin(xy);
+    hi = hi.cwiseMax(xy);
+  }
+  g.ensure_contains(lo, hi, s.grow_margin_cells);
+  std::set<Cell> hit, end_free, ray_free;
+  for (const auto i : used) {
+    const Eigen::Vector2i c = g.cell_of(pts[i].head<2>());
+    (labels[i] == PointLabel::kObstacle ? hit : end_free).insert({c.x(), c.y()});
+  }
+  if (s.clear_along_rays) {
+    const Eigen::Vector2i sc = g.cell_of(sensor);
+    std::set<Cell> ends = hit;
+    ends.insert(end_free.begin(), end_free.end());
+    for (const Cell& e : ends) {
+      ++st.rays;
+      if (!reference_ray(g, sensor, {sc.x(), sc.y()}, e, ray_free)) ++st.ray_failures;
+    }
+  }
+  auto apply = [&](const Cell& c, float delta) {
+    float& l = g.logodds()[g.index(c.first, c.second)];
+    l = std::clamp((std::isnan(l) ? 0.0f : l) + delta, s.min_logodds, s.max_logodds);
+  };
+  for (const Cell& c : hit) apply(c, s.hit_logodds);
+  std::set<Cell> miss = end_free;
+  miss.insert(ray_free.begin(), ray_free.end());
+  for (const Cell& c : miss)
+    if (!hit.count(c)) apply(c, s.miss_logodds);
+  return st;
+}
+
+::testing::AssertionResult same_grid(const OccupancyGrid& a, const OccupancyGrid& b) {
+  if (a.width() != b.width() || a.height() != b.height() || a.origin() != b.origin() || a.resolution() != b.resolution())
+    return ::testing::AssertionFailure() << "geometry differs: " << a.width() << "x" << a.height() << " at " << a.origin().transpose()
+                                         << " vs " << b.width() << "x" << b.height() << " at " << b.origin().transpose();
+  std::size_t diff = 0;
+  auto f = ::testing::AssertionFailure();
+  for (int y = 0; y < a.height(); ++y)
+    for (int x = 0; x < a.width(); ++x) {
+      const float u = a.at(x, y), v = b.at(x, y);
+      if (std::memcmp(&u, &v, sizeof(float)) != 0 && !(std::isnan(u) && std::isnan(v))) {
+        if (++diff <= 5) f << " cell (" << x << "," << y << "): " << u << " vs " << v << ";";
+      }
+    }
+  if (diff == 0) return ::testing::AssertionSuccess();
+  return f << " " << diff << " cells differ";
+}
+
+struct Scan {
+  Eigen::Vector2f sensor;
+  std::vector<Eigen::Vector3f> pts;
+  std::vector<PointLabel> labels;
+};
+
+Scan random_scan(std::uint32_t seed, std::size_t n, float spread, Eigen::Vector2f centre = {0, 0}) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> lab(0, 9);
+  Scan s;
+  s.sensor = centre + Eigen::Vector2f(u(rng), u(rng)) * 0.5f;
+  for (std::size_t i = 0; i < n; ++i) {
+    // Points on a few "walls" (many points per cell) and scattered ones.
+    Eigen::Vector2f xy;
+    if (i % 3 == 0) {
+      const float a = u(rng);
+      xy = centre + Eigen::Vector2f(spread * 0.8f, spread * a);
+      if (i % 2) xy = centre + Eigen::Vector2f(spread * a, -spread * 0.6f);
+    } else {
+      xy = centre + Eigen::Vector2f(u(rng), u(rng)) * spread;
+    }
+    s.pts.emplace_back(xy.x(), xy.y(), u(rng));
+    const int l = lab(rng);
+    s.labels.push_back(l < 4 ? PointLabel::kObstacle : l < 9 ? PointLabel::kFloor : PointLabel::kIgnored);
+    if (i % 37 == 0) s.pts.back().x() = kNaN;
+    if (i % 41 == 0) s.pts.back().z() = kNaN;  // z is not used by the 2D grid
+  }
+  return s;
+}
+
+// ---- tests: update_grid vs reference ---------------------------------------------------------------
+
+TEST(Grid, UpdateMatchesReferenceOnRandomScenes) {
+  GridUpdateWorkspace ws;
+  for (const float res : {0.05f, 0.1f, 0.037f}) {
+    OccupancyGrid g(res), ref(res);
+    GridUpdateSettings s;
+    s.grow_margin_cells = 7;
+    std::size_t rays = 0, failures = 0;
+    for (std::uint32_t call = 0; call < 12; ++call) {
+      // The robot moves; scans overlap; later scans make the grid grow in every direction.
+      const Eigen::Vector2f centre(1.5f * std::cos(0.7f * static_cast<float>(call)), 1.2f * std::sin(0.9f * static_cast<float>(call)));
+      const Scan sc = random_scan(1000 * static_cast<std::uint32_t>(res * 1000) + call, 1500, 3.0f + 0.3f * static_cast<float>(call), centre);
+      update_grid(g, sc.sensor, sc.pts, sc.labels, s, ws);
+      const RefStats st = reference_update(ref, sc.sensor, sc.pts, sc.labels, s);
+      rays += st.rays;
+      failures += st.ray_failures;
+      ASSERT_TRUE(same_grid(g, ref)) << "resolution " << res << ", call " << call;
+    }
+    EXPECT_EQ(failures, 0u);
+    EXPECT_GT(rays, 1000u);
+    EXPECT_GT(g.known_cells(), 1000u);
+  }
+}
+
+TEST(Grid, UpdateMatchesReferenceWithoutRaysAndWithShortRays) {
+  GridUpdateWorkspace ws;
+  GridUpdateSettings s;
+  s.clear_along_rays = false;
+  OccupancyGrid g(0.05f), ref(0.05f);
+  for (std::uint32_t call = 0; call < 4; ++call) {
+    const Scan sc = random_scan(77 + call, 3000, 4.0f);
+    update_grid(g, sc.sensor, sc.pts, sc.labels, s, ws);
+    reference_update(ref, sc.sensor, sc.pts, sc.labels, s);
+    ASSERT_TRUE(same_grid(g, ref)) << "call " << call;
+  }
+  s.clear_along_rays = true;
+  s.max_ray_length_m = 1.5f;
+  for (std::uint32_t call = 0; call < 4; ++call) {
+    const Scan sc = random_scan(88 + call, 3000, 4.0f);
+    update_grid(g, sc.sensor, sc.pts, sc.labels, s, ws);
+    reference_update(ref, sc.sensor, sc.pts, sc.labels, s);
+    ASSERT_TRUE(same_grid(g, ref)) << "call " << call;
+  }
+}
+
+TEST(Grid, UpdateOnPresizedGridAndAxisAlignedRays) {
+  // Sensor and points on cell centres along rows / columns / diagonals (exact ties in the DDA).
+  OccupancyGrid g(0.1f, Eigen::Vector2f(-5.0f, -5.0f), 100, 100), ref = g;
+  std::vector<Eigen::Vector3f> pts;
+  std::vector<PointLabel> labels;
+  for (int k = -30; k <= 30; k += 3) {
+    const float f = 0.1f * static_cast<float>(k) + 0.05f;
+    for (const Eigen::Vector2f& xy : {Eigen::Vector2f(f, 0.05f), Eigen::Vector2f(0.05f, f), Eigen::Vector2f(f, f)}) {
+      pts.emplace_back(xy.x(), xy.y(), 0.0f);
+      labels.push_back(k % 2 ? PointLabel::kObstacle : PointLabel::kFloor);
+    }
+  }
+  GridUpdateSettings s;
+  s.grow_margin_cells = 0;
+  GridUpdateWorkspace ws;
+  const Eigen::Vector2f sensor(0.05f, 0.05f);
+  update_grid(g, sensor, pts, labels, s, ws);
+  const RefStats st = reference_update(ref, sensor, pts, labels, s);
+  EXPECT_EQ(st.ray_failures, 0u);
+  EXPECT_EQ(g.width(), 100);  // everything was inside: no growth
+  EXPECT_EQ(g.origin(), Eigen::Vector2f(-5.0f, -5.0f));
+  EXPECT_TRUE(same_grid(g, ref));
+}
+
+// ---- tests: semantics by hand ------------------------------------------------------------------------
+
+TEST(Grid, SingleObstacleHitAndRay) {
+  OccupancyGrid g(0.1f, Eigen::Vector2f(0, 0), 20, 10);
+  GridUpdateSettings s;
+  s.grow_margin_cells = 0;
+  GridUpdateWorkspace ws;
+  const std::vector<Eigen::Vector3f> p{{1.55f, 0.55f, 0.3f}};
+  const std::vector<PointLabel> l{PointLabel::kObstacle};
+  update_grid(g, Eigen::Vector2f(0.25f, 0.55f), p, l, s, ws);
+  EXPECT_FLOAT_EQ(g.at(15, 5), 0.85f);
+  for (int x = 2; x < 15; ++x) EXPECT_FLOAT_EQ(g.at(x, 5), -0.4f) << x;  // the ray, sensor cell included
+  EXPECT_TRUE(std::isnan(g.at(1, 5)));
+  EXPECT_TRUE(std::isnan(g.at(16, 5)));
+  EXPECT_TRUE(std::isnan(g.at(8, 4)));
+  EXPECT_EQ(g.known_cells(), 14u);
+}
+
+TEST(Grid, OneUpdatePerCellPerCallAndHitWins) {
+  OccupancyGrid g(0.1f, Eigen::Vector2f(0, 0), 30, 10);
+  GridUpdateSettings s;
+  s.grow_margin_cells = 0;
+  GridUpdateWorkspace ws;
+  std::vector<Eigen::Vector3f> p;
+  std::vector<PointLabel> l;
+  // 50 obstacle and 50 floor points in cell (10, 5); a far floor point at (25, 5) whose ray crosses (10, 5).
+  for (int i = 0; i < 50; ++i) {
+    p.emplace_back(1.01f + 0.0015f * static_cast<float>(i), 0.52f, 0.0f);
+    l.push_back(PointLabel::kObstacle);
+    p.emplace_back(1.02f + 0.0015f * static_cast<float>(i), 0.57f, 0.0f);
+    l.push_back(PointLabel::kFloor);
+  }
+  p.emplace_back(2.55f, 0.55f, 0.0f);
+  l.push_back(PointLabel::kFloor);
+  for (int i = 0; i < 20; ++i) {  // floor points in cell (20, 5), also on the ray
+    p.emplace_back(2.01f + 0.004f * static_cast<float>(i), 0.55f, 0.0f);
+    l.push_back(PointLabel::kFloor);
+  }
+  update_grid(g, Eigen::Vector2f(0.05f, 0.55f), p, l, s, ws);
+  EXPECT_FLOAT_EQ(g.at(10, 5), 0.85f);   // hit once, no miss
+  EXPECT_FLOAT_EQ(g.at(20, 5), -0.4f);   // one miss, though 20 end points and a ray
+  EXPECT_FLOAT_EQ(g.at(25, 5), -0.4f);
+  EXPECT_FLOAT_EQ(g.at(0, 5), -0.4f);
+  EXPECT_TRUE(std::isnan(g.at(26, 5)));
+}
+
+TEST(Grid, ClampingOverRepeatedCalls) {
+  OccupancyGrid g(0.1f, Eigen::Vector2f(0, 0), 20, 3);
+  GridUpdateSettings s;
+  s.grow_margin_cells = 0;
+  GridUpdateWorkspace ws;
+  const std::vector<Eigen::Vector3f> p{{1.55f, 0.15f, 0.0f}};
+  const std::vector<PointLabel> l{PointLabel::kObstacle};
+  for (int k = 1; k <= 10; ++k) {
+    update_grid(g, Eigen::Vector2f(0.05f, 0.15f), p, l, s, ws);
+    EXPECT_FLOAT_EQ(g.at(15, 1), std::min(3.5f, 0.85f * static_cast<float>(k))) << k;
+    EXPECT_FLOAT_EQ(g.at(5, 1), std::max(-2.0f, -0.4f * static_cast<float>(k))) << k;
+  }
+  EXPECT_EQ(g.at(15, 1), 3.5f);
+  EXPECT_EQ(g.at(5, 1), -2.0f);
+  // An occupied cell seen free again goes down from the clamp.
+  const std::vector<PointLabel> floor{PointLabel::kFloor};
+  update_grid(g, Eigen::Vector2f(0.05f, 0.15f), p, floor, s, ws);
+  EXPECT_FLOAT_EQ(g.at(15, 1), 3.1f);
+}
+
+TEST(Grid, IgnoredNonFiniteAndFarPointsAreSkipped) {
+  OccupancyGrid g(0.1f);
+  GridUpdateSettings s;
+  s.max_ray_length_m = 3.0f;
+  s.grow_margin_cells = 2;
+  GridUpdateWorkspace ws;
+  const std::vector<Eigen::Vector3f> p{{1.05f, 0.05f, 0}, {kNaN, 1.0f, 0}, {1.0f, kInf, 0}, {-1.05f, 0.05f, 0}, {3.5f, 0.05f, 0},
+                                       {1e30f, 5.0f, 0}};
+  const std::vector<PointLabel> l{PointLabel::kIgnored, PointLabel::kObstacle, PointLabel::kObstacle, PointLabel::kObstacle,
+                                  PointLabel::kObstacle, PointLabel::kFloor};
+  update_grid(g, Eigen::Vector2f(0.05f, 0.05f), p, l, s, ws);
+  // Only the point at -1.05 counts: 1 hit + 11 ray cells (sensor cell 0 to -10); the grid covers it
+  // plus the margin only.
+  EXPECT_EQ(g.known_cells(), 12u);
+  const Eigen::Vector2i c = g.cell_of(Eigen::Vector2f(-1.05f, 0.05f));
+  EXPECT_FLOAT_EQ(g.at(c.x(), c.y()), 0.85f);
+  const Eigen::Vector2i ignored = g.cell_of(Eigen::Vector2f(1.05f, 0.05f));
+  EXPECT_FALSE(g.in_bounds(ignored.x(), ignored.y()) && !std::isnan(g.at(ignored.x(), ignored.y())));
+  EXPECT_LE(g.width(), 11 + 2 * 2 + 1);
+  EXPECT_LE(g.height(), 1 + 2 * 2 + 1);
+  // A point exactly at max_ray_length counts.
+  OccupancyGrid h(0.5f, Eigen::Vector2f(-5, -5), 20, 20);
+  const std::vector<Eigen::Vector3f> q{{3.0f, 0.0f, 0.0f}};
+  const std::vector<PointLabel> ql{PointLabel::kObstacle};
+  update_grid(h, Eigen::Vector2f(0.0f, 0.0f), q, ql, s, ws);
+  EXPECT_FLOAT_EQ(h.at(h.cell_of(q[0].head<2>()).x(), 10), 0.85f);
+  // All ignored / empty scan: only growth to hold the sensor, no update.
+  OccupancyGrid e(0.1f);
+  update_grid(e, Eigen::Vector2f(2.0f, 3.0f), {}, {}, s, ws);
+  EXPECT_EQ(e.known_cells(), 0u);
+  const Eigen::Vector2i sc = e.cell_of(Eigen::Vector2f(2.0f, 3.0f));
+  EXPECT_TRUE(e.in_bounds(sc.x(), sc.y()));
+}
+
+// ---- tests: OccupancyGrid --------------------------------------------------------------------------
+
+TEST(Grid, GrowthKeepsCellsAtTheirWorldPosition) {
+  OccupancyGrid g(0.05f, Eigen::Vector2f(1.3f, -0.7f), 30, 20);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-2.0f, 3.5f);
+  std::vector<std::pair<Eigen::Vector2f, float>> marks;
+  for (int y = 0; y < g.height(); ++y)
+    for (int x = 0; x < g.width(); ++x) {
+      const float v = (x * 7 + y * 3) % 5 == 0 ? kNaN : u(rng);
+      g.logodds()[g.index(x, y)] = v;
+      marks.emplace_back(g.cell_center(x, y), v);
+    }
+  const float before_res = g.resolution();
+  const std::vector<std::pair<Eigen::Vector2f, Eigen::Vector2f>> boxes{
+      {{-3.013f, -4.007f}, {-2.011f, -3.512f}}, {{10.017f, 0.013f}, {12.019f, 1.011f}}, {{0.012f, 5.009f}, {0.113f, 9.021f}},
+      {{-20.007f, -20.013f}, {25.011f, 30.017f}}};
+  for (const auto& [lo, hi] : boxes) {
+    g.ensure_contains(lo, hi, 3);
+    EXPECT_EQ(g.resolution(), before_res);
+    EXPECT_EQ(g.cell_count(), static_cast<std::size_t>(g.width()) * static_cast<std::size_t>(g.height()));
+    // The box plus the margin is inside.
+    const Eigen::Vector2i a = g.cell_of(lo), b = g.cell_of(hi);
+    EXPECT_TRUE(g.in_bounds(a.x() - 3, a.y() - 3) && g.in_bounds(b.x() + 3, b.y() + 3));
+    // Every old cell holds its old value at its old world position.
+    std::size_t known = 0;
+    for (const auto& [xy, v] : marks) {
+      const Eigen::Vector2i c = g.cell_of(xy);
+      ASSERT_TRUE(g.in_bounds(c.x(), c.y()));
+      const float now = g.at(c.x(), c.y());
+      if (std::isnan(v)) {
+        EXPECT_TRUE(std::isnan(now));
+      } else {
+        EXPECT_EQ(now, v);
+        ++known;
+      }
+      EXPECT_LT((g.cell_center(c.x(), c.y()) - xy).norm(), 1e-4f);  // on the same lattice
+    }
+    EXPECT_EQ(g.known_cells(), known);  // new cells are unknown
+  }
+  // Already inside: no change.
+  const auto w = g.width(), h = g.height();
+  const Eigen::Vector2f o = g.origin();
+  g.ensure_contains(Eigen::Vector2f(0, 0), Eigen::Vector2f(1, 1), 2);
+  EXPECT_EQ(g.width(), w);
+  EXPECT_EQ(g.height(), h);
+  EXPECT_EQ(g.origin(), o);
+}
+
+TEST(Grid, GrowthFromEmptyAndLimits) {
+  OccupancyGrid g(0.1f);
+  EXPECT_EQ(g.cell_count(), 0u);
+  EXPECT_EQ(g.known_cells(), 0u);
+  g.ensure_contains(Eigen::Vector2f(-1.0f, 2.0f), Eigen::Vector2f(1.0f, 2.5f), 0);
+  EXPECT_GE(g.width(), 20);
+  EXPECT_GE(g.height(), 5);
+  EXPECT_LE(g.width(), 22);
+  EXPECT_LE(g.height(), 7);
+  EXPECT_EQ(g.known_cells(), 0u);
+  const auto kOut = ErrorCode::kOutOfRange;
+  const OccupancyGrid before = g;
+  EXPECT_DUET_ERROR(g.ensure_contains(Eigen::Vector2f(0, 0), Eigen::Vector2f(kNaN, 0), 0), kOut, "not finite");
+  EXPECT_DUET_ERROR(g.ensure_contains(Eigen::Vector2f(-1e7f, 0), Eigen::Vector2f(1e7f, 1), 0), kOut, "limit");
+  EXPECT_DUET_ERROR(g.ensure_contains(Eigen::Vector2f(0, 0), Eigen::Vector2f(100, 100), 0, 1000), kOut, "limit");
+  EXPECT_TRUE(same_grid(g, before));  // a failed growth changes nothing
+  EXPECT_DUET_ERROR(OccupancyGrid{0.0f}, ErrorCode::kInvalidArgument, "resolution");
+  EXPECT_DUET_ERROR(OccupancyGrid{kNaN}, ErrorCode::kInvalidArgument, "resolution");
+  EXPECT_DUET_ERROR(OccupancyGrid(0.1f, Eigen::Vector2f(0, 0), -1, 5), ErrorCode::kInvalidArgument, "size");
+  EXPECT_DUET_ERROR(OccupancyGrid(0.1f, Eigen::Vector2f(0, 0), 100000, 100000), kOut, "too large");
+}
+
+TEST(Grid, ProbabilitiesAndRosTrinary) {
+  OccupancyGrid g(0.1f, Eigen::Vector2f(0, 0), 8, 1);
+  const std::vector<float> l{kNaN, 0.0f, 3.5f, -2.0f, 0.85f, -0.4f, 0.61f, -1.41f};
+  std::copy(l.begin(), l.end(), g.logodds().begin());
+  std::vector<float> p(8);
+  g.to_probabilities(p);
+  EXPECT_EQ(p[0], -1.0f);
+  for (std::size_t i = 1; i < l.size(); ++i) EXPECT_NEAR(p[i], 1.0 / (1.0 + std::exp(-static_cast<double>(l[i]))), 1e-6) << i;
+  EXPECT_FLOAT_EQ(p[1], 0.5f);
+  std::vector<std::int8_t> t(8);
+  g.to_ros_trinary(t);
+  // Defaults 0.65 / 0.45. p: -, 0.5, 0.971, 0.119, 0.701, 0.401, 0.648 (< 0.65), 0.196
+  EXPECT_EQ(t, (std::vector<std::int8_t>{-1, -1, 100, 0, 100, 0, -1, 0}));
+  g.to_ros_trinary(t, 0.65f, 0.196f);  // map_server's thresholds: 0.19624 > 0.196
+  EXPECT_EQ(t, (std::vector<std::int8_t>{-1, -1, 100, 0, 100, -1, -1, -1}));
+  // Reference on random values away from the thresholds.
+  OccupancyGrid r(0.1f, Eigen::Vector2f(0, 0), 100, 100);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-4.0f, 4.0f);
+  for (auto& x : r.logodds()) x = rng() % 10 == 0 ? kNaN : u(rng);
+  std::vector<float> rp(r.cell_count());
+  std::vector<std::int8_t> rt(r.cell_count());
+  r.to_probabilities(rp);
+  r.to_ros_trinary(rt, 0.7f, 0.3f);
+  for (std::size_t i = 0; i < rp.size(); ++i) {
+    const float x = r.logodds()[i];
+    if (std::isnan(x)) {
+      EXPECT_EQ(rp[i], -1.0f);
+      EXPECT_EQ(rt[i], -1);
+      continue;
+    }
+    const double pr = 1.0 / (1.0 + std::exp(-static_cast<double>(x)));
+    EXPECT_NEAR(rp[i], pr, 1e-6);
+    if (std::abs(pr - 0.7) < 1e-5 || std::abs(pr - 0.3) < 1e-5) continue;
+    EXPECT_EQ(rt[i], pr >= 0.7 ? 100 : pr <= 0.3 ? 0 : -1) << "log-odds " << x;
+  }
+  // Size and threshold errors.
+  std::vector<float> small(3);
+  std::vector<std::int8_t> small_t(3);
+  const auto kInv = ErrorCode::kInvalidArgument;
+  EXPECT_DUET_ERROR(g.to_probabilities(small), kInv, "entries");
+  EXPECT_DUET_ERROR(g.to_ros_trinary(small_t), kInv, "entries");
+  EXPECT_DUET_ERROR(g.to_ros_trinary(t, 0.3f, 0.6f), kInv, "threshold");
+  EXPECT_DUET_ERROR(g.to_ros_trinary(t, 1.5f, 0.2f), kInv, "threshold");
+  // free_threshold 0: nothing is free; occupied 1: only p = 1 (never reached from finite log-odds).
+  g.to_ros_trinary(t, 1.0f, 0.0f);
+  EXPECT_EQ(std::count(t.begin(), t.end(), 0), 0);
+}
+
+TEST(Grid, CellOfAndCenter) {
+  const OccupancyGrid g(0.25f, Eigen::Vector2f(-1.0f, 2.0f), 10, 10);
+  EXPECT_EQ(g.cell_of(Eigen::Vector2f(-1.0f, 2.0f)), Eigen::Vector2i(0, 0));
+  EXPECT_EQ(g.cell_of(Eigen::Vector2f(-0.76f, 2.26f)), Eigen::Vector2i(0, 1));
+  EXPECT_EQ(g.cell_of(Eigen::Vector2f(-1.01f, 1.99f)), Eigen::Vector2i(-1, -1));
+  EXPECT_EQ(g.cell_center(0, 0), Eigen::Vector2f(-0.875f, 2.125f));
+  EXPECT_EQ(g.index(3, 2), 23u);  // row-major, row 0 at the lowest y
+  EXPECT_TRUE(g.in_bounds(9, 9));
+  EXPECT_FALSE(g.in_bounds(10, 0));
+  EXPECT_FALSE(g.in_bounds(0, -1));
+  EXPECT_EQ(g.known_cells(), 0u);
+  EXPECT_TRUE(std::isnan(g.at(4, 4)));
+}
+
+TEST(Grid, BadInputThrows) {
+  OccupancyGrid g(0.1f, Eigen::Vector2f(0, 0), 10, 10);
+  GridUpdateWorkspace ws;
+  const std::vector<Eigen::Vector3f> p{{0.5f, 0.5f, 0}, {0.6f, 0.5f, 0}};
+  const std::vector<PointLabel> one{PointLabel::kObstacle};
+  const std::vector<PointLabel> two(2, PointLabel::kObstacle);
+  const auto kInv = ErrorCode::kInvalidArgument;
+  EXPECT_DUET_ERROR(update_grid(g, Eigen::Vector2f(0, 0), p, one, {}, ws), kInv, "labels");
+  EXPECT_DUET_ERROR(update_grid(g, Eigen::Vector2f(kNaN, 0), p, two, {}, ws), kInv, "sensor");
+  struct Bad {
+    GridUpdateSettings s;
+    const char* field;
+  };
+  std::vector<Bad> bad;
+  GridUpdateSettings s;
+  s.hit_logodds = 0.0f;
+  bad.push_back({s, "hit_logodds"});
+  s = {};
+  s.miss_logodds = 0.1f;
+  bad.push_back({s, "miss_logodds"});
+  s = {};
+  s.min_logodds = 0.5f;
+  bad.push_back({s, "min_logodds"});
+  s = {};
+  s.max_logodds = kInf;
+  bad.push_back({s, "max_logodds"});
+  s = {};
+  s.max_ray_length_m = 0.0f;
+  bad.push_back({s, "max_ray_length_m"});
+  s = {};
+  s.grow_margin_cells = -1;
+  bad.push_back({s, "grow_margin_cells"});
+  for (const auto& b : bad) {
+    EXPECT_DUET_ERROR(update_grid(g, Eigen::Vector2f(0, 0), p, two, b.s, ws), kInv, b.field);
+    EXPECT_DUET_ERROR(validate(b.s), kInv, b.field);
+  }
+  EXPECT_EQ(g.known_cells(), 0u);  // nothing applied
+  // Huge coordinates within a huge max_ray_length: the growth limit, not a wrong or giant grid.
+  s = {};
+  s.max_ray_length_m = 1e7f;
+  const std::vector<Eigen::Vector3f> far{{5e6f, 0, 0}};
+  EXPECT_DUET_ERROR(update_grid(g, Eigen::Vector2f(0, 0), far, one, s, ws), ErrorCode::kOutOfRange, "limit");
+  EXPECT_EQ(g.width(), 10);
+  EXPECT_EQ(g.known_cells(), 0u);
+}
+
+TEST(Grid, IdenticalWithOneAndTwoThreads) {
+  const auto run = [](int threads) {
+    return test::in_arena(threads, [] {
+      OccupancyGrid g(0.05f);
+      GridUpdateWorkspace ws;
+      for (std::uint32_t call = 0; call < test::full_or(4u, 3u); ++call) {
+        const Scan sc = random_scan(500 + call, test::full_or<std::size_t>(20000, 5000), 6.0f, Eigen::Vector2f(0.5f * static_cast<float>(call), 0.0f));
+        update_grid(g, sc.sensor, sc.pts, sc.labels, {}, ws);
+      }
+      return g;
+    });
+  };
+  const OccupancyGrid a = run(1), b = run(2);
+  EXPECT_TRUE(same_grid(a, b));
+  const std::vector<float> la(a.logodds().begin(), a.logodds().end()), lb(b.logodds().begin(), b.logodds().end());
+  EXPECT_TRUE(test::bitwise_equal(la, lb));
+  EXPECT_GT(a.known_cells(), 10000u);
+}
+
+}  // namespace
+}  // namespace duet
