@@ -114,21 +114,45 @@ void voxel_filter(PointsView points, ColorsView colors, const VoxelFilterSetting
   if (n == 0) return;
 
   // 1. Bounds of the finite points (min/max are exact: the reduction order does not matter).
+  //    The fast pass takes every finite coordinate, also of points with a NaN in another one;
+  //    that only widens the box, and if the wider box fails the range check below, the bounds
+  //    are recomputed from the finite points alone before any error is raised.
+  auto exact_bounds = [&](std::size_t begin, std::size_t end) {
+    Bounds bb;
+    for (std::size_t i = begin; i < end; ++i) {
+      const Eigen::Vector3f q = points[i];
+      if (!is_finite(q)) continue;
+      bb.lo = bb.lo.cwiseMin(q);
+      bb.hi = bb.hi.cwiseMax(q);
+      ++bb.finite;
+    }
+    return bb;
+  };
   const std::size_t nb = detail::block_count(n, kBlock);
   std::vector<Bounds> block_bounds(nb);
   detail::for_blocks(n, kBlock, [&](std::size_t b, std::size_t begin, std::size_t end) {
-    Bounds bb;
+    // Plain float min/max: written as (x < lo ? x : lo), a NaN never replaces a bound.
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (std::size_t i = begin; i < end; ++i) {
-      const Eigen::Vector3f p = points[i];
-      if (!is_finite(p)) continue;
-      bb.lo = bb.lo.cwiseMin(p);
-      bb.hi = bb.hi.cwiseMax(p);
-      ++bb.finite;
+      const float* p = points.ptr(i);
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = p[a] < lo[a] ? p[a] : lo[a];
+        hi[a] = p[a] > hi[a] ? p[a] : hi[a];
+      }
+    }
+    Bounds bb;
+    bb.lo = Eigen::Vector3f(lo[0], lo[1], lo[2]);
+    bb.hi = Eigen::Vector3f(hi[0], hi[1], hi[2]);
+    if (!bb.lo.allFinite() || !bb.hi.allFinite()) {  // an infinite point (or none finite): exact pass
+      bb = exact_bounds(begin, end);
+    } else {
+      bb.finite = 1;  // at least one finite point (the exact count is not needed)
     }
     block_bounds[b] = bb;
   });
   Bounds all;
   for (const auto& bb : block_bounds) {
+    if (bb.finite == 0) continue;
     all.lo = all.lo.cwiseMin(bb.lo);
     all.hi = all.hi.cwiseMax(bb.hi);
     all.finite += bb.finite;
@@ -137,10 +161,19 @@ void voxel_filter(PointsView points, ColorsView colors, const VoxelFilterSetting
 
   // 2. Voxel index range, exactly as pcl::VoxelGrid: floor(p * inverse_leaf) in float.
   const float inv = 1.0f / settings.leaf_size_m;
+  constexpr float kLimit = 2147483520.0f;  // largest float below 2^31
+  auto in_range = [&](const Bounds& b) {
+    for (int a = 0; a < 3; ++a)
+      if (!(std::fabs(b.lo[a] * inv) < kLimit) || !(std::fabs(b.hi[a] * inv) < kLimit)) return false;
+    return true;
+  };
+  if (!in_range(all)) {
+    all = exact_bounds(0, n);
+    if (all.finite == 0) return;
+  }
   std::int64_t min_b[3], div[3];
   for (int a = 0; a < 3; ++a) {
     const float lo = all.lo[a] * inv, hi = all.hi[a] * inv;
-    constexpr float kLimit = 2147483520.0f;  // largest float below 2^31
     if (!(std::fabs(lo) < kLimit) || !(std::fabs(hi) < kLimit))
       fail(ErrorCode::kOutOfRange, "voxel_filter: coordinate " +
                                        std::to_string(std::fabs(lo) > std::fabs(hi) ? all.lo[a] : all.hi[a]) +
@@ -164,8 +197,26 @@ void voxel_filter(PointsView points, ColorsView colors, const VoxelFilterSetting
   detail::for_blocks(n, kBlock, [&](std::size_t b, std::size_t begin, std::size_t end) {
     Map& m = ws.blocks[b];
     map_reset(m, std::max<std::size_t>(m.keys.size(), 256));
-    std::uint64_t last_key = kEmpty;
-    std::uint32_t last = 0;
+    // Runs of consecutive points in one voxel (neighbouring pixels) are summed in registers and
+    // added to the map once per run.
+    std::uint64_t run_key = kEmpty;
+    double sx = 0, sy = 0, sz = 0;
+    std::uint64_t sr = 0, sg = 0, sb = 0;
+    std::uint32_t sc = 0;
+    auto flush = [&] {
+      if (sc == 0) return;
+      auto& a = m.acc[map_insert(m, run_key)];
+      a.x += sx;
+      a.y += sy;
+      a.z += sz;
+      a.r += sr;
+      a.g += sg;
+      a.b += sb;
+      a.count += sc;
+      sx = sy = sz = 0;
+      sr = sg = sb = 0;
+      sc = 0;
+    };
     for (std::size_t i = begin; i < end; ++i) {
       const float* p = points.ptr(i);
       if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) continue;
@@ -173,22 +224,22 @@ void voxel_filter(PointsView points, ColorsView colors, const VoxelFilterSetting
       const auto iy = static_cast<std::uint64_t>(fast_floor(p[1] * inv) - min_b[1]);
       const auto iz = static_cast<std::uint64_t>(fast_floor(p[2] * inv) - min_b[2]);
       const std::uint64_t key = ix + iy * mul_y + iz * mul_z;
-      if (key != last_key) {  // neighbouring pixels often share a voxel
-        last = map_insert(m, key);
-        last_key = key;
+      if (key != run_key) {
+        flush();
+        run_key = key;
       }
-      auto& a = m.acc[last];
-      a.x += p[0];
-      a.y += p[1];
-      a.z += p[2];
-      ++a.count;
+      sx += p[0];
+      sy += p[1];
+      sz += p[2];
+      ++sc;
       if (with_color) {
         const std::uint8_t* c = colors.ptr(i);
-        a.r += c[0];
-        a.g += c[1];
-        a.b += c[2];
+        sr += c[0];
+        sg += c[1];
+        sb += c[2];
       }
     }
+    flush();
   });
 
   // 4. Merge the blocks in block order (deterministic sums), then sort the distinct voxels.

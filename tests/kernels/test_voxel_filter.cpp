@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <array>
 #include <cstdio>
 #include <map>
@@ -213,6 +215,17 @@ TEST(VoxelFilter, HugeCoordinatesThrowOutOfRange) {
   s.leaf_size_m = 1e-9f;
   p = {{5.0f, 0, 0}};
   EXPECT_DUET_ERROR(voxel_filter(p, {}, s, out), kOut, "voxel");
+}
+
+TEST(VoxelFilter, PartlyNaNPointWithAHugeCoordinateIsSkippedNotAnError) {
+  // The point is skipped (it is not finite), so its huge y must not trigger the range error.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<Eigen::Vector3f> p{{nan, 1e30f, 0.0f}, {0.01f, 0.01f, 0.01f}, {0.02f, 0.02f, 0.02f},
+                                       {0.0f, -1e30f, nan}, {-std::numeric_limits<float>::infinity(), 0, 0}};
+  PointCloud out;
+  voxel_filter(p, {}, {}, out);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_NEAR(out.points[0].x(), 0.015f, 1e-7f);
 }
 
 TEST(VoxelFilter, LargeButRepresentableCoordinatesAreExact) {
