@@ -16,7 +16,7 @@
 namespace duet {
 
 struct KdTreeSettings {
-  int max_leaf_size = 12;  ///< points per leaf bucket, >= 1
+  int max_leaf_size = 32;  ///< points per leaf bucket, >= 1
 };
 
 class KdTree {
