@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include "runtime_test_util.hpp"
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -42,39 +44,9 @@ namespace {
 
 const fs::path kPclData = fs::path(DUET_DATA_DIR) / "pcl";
 
-// A directory per test under the build tree, removed at the end.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::path(DUET_BINARY_DIR) / "test_tmp" /
-            ("cloud_io_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  [[nodiscard]] fs::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  fs::path path_;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-void spit(const fs::path& p, const std::string& bytes) {
-  std::ofstream out(p, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
+using duet_test::slurp;
+using duet_test::spit;
+using duet_test::TempDir;
 
 // Same float, bit for bit, except that any NaN equals any NaN (text formats drop payloads).
 bool same_float(float a, float b) {

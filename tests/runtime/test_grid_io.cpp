@@ -5,6 +5,8 @@
 #include <duet/runtime/grid_io.hpp>
 
 #include <gtest/gtest.h>
+
+#include "runtime_test_util.hpp"
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -29,38 +31,9 @@ const fs::path kMaps = fs::path(DUET_DATA_DIR) / "maps";
 const fs::path kWillow = kMaps / "willow-2010-02-18-0.10.yaml";
 constexpr float kOcc = 3.5f, kFree = -2.0f;
 
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::path(DUET_BINARY_DIR) / "test_tmp" /
-            ("grid_io_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  [[nodiscard]] fs::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  fs::path path_;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-void spit(const fs::path& p, const std::string& bytes) {
-  std::ofstream out(p, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
+using duet_test::slurp;
+using duet_test::spit;
+using duet_test::TempDir;
 
 // Reference PGM P5 reader for well-formed 8-bit files (header tokens and comments).
 struct Pgm {
