@@ -351,14 +351,11 @@ void finish_input(Input& in, const Eigen::Isometry3f& T_level_for_labels, const 
 void build_real(const fs::path& root) {
   const fs::path slam = root / "rgbd" / "slambook2_ch5";
   const fs::path tdm = root / "rgbd" / "3dmatch_seq01";
-  auto keep = [](std::vector<RawFrame>& fr) {
-    std::vector<RawFrame*> out;
-    for (auto& f : fr) {
+  auto keep = [](const std::vector<RawFrame>& fr) {  // the frames' views point into these images
+    for (const auto& f : fr) {
       g_data.images.push_back(std::make_shared<cv::Mat>(f.depth));
       g_data.images.push_back(std::make_shared<cv::Mat>(f.color));
-      out.push_back(&f);
     }
-    return out;
   };
   static std::vector<RawFrame> dual_raw, slam_raw, tdm_raw;
   dual_raw = load_slambook(slam, {1, 3});
