@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "runtime_test_util.hpp"
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -17,30 +19,7 @@ namespace {
 
 const fs::path kProfiles = fs::path(DUET_SOURCE_DIR) / "profiles";
 
-// A temp directory per test, removed at the end.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("duet_test_profile_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  [[nodiscard]] const fs::path& path() const { return path_; }
-  fs::path write(const std::string& name, const std::string& text) const {
-    const fs::path p = path_ / name;
-    std::ofstream(p, std::ios::binary) << text;
-    return p;
-  }
-
- private:
-  fs::path path_;
-};
+using duet_test::TempDir;
 
 std::string read_text(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);

@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include "runtime_test_util.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -27,24 +29,7 @@ const fs::path kRgbd = fs::path(DUET_DATA_DIR) / "rgbd";
   if (!fs::is_directory(dir)) GTEST_SKIP() << "real data not found at " << (dir).string() \
                                            << " (../shared/data is absent)"
 
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("duet_test_rgbd_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  [[nodiscard]] const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using duet_test::TempDir;
 
 void write_text(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
 
