@@ -7,8 +7,13 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <limits>
 #include <string>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace duet {
 
@@ -19,29 +24,38 @@ struct KdTree::Item {
 
 namespace {
 
-// Sorted (by distance, then input index) fixed-capacity list of the best k candidates.
+// Sorted fixed-capacity list of the best k candidates. Each candidate is one 64-bit key:
+// the bits of its squared distance (a non-negative float: its bits sort as the value) above
+// its input index, so "nearer, then smaller index" is a single integer comparison.
 struct KBest {
   int k, count = 0;
-  float* d;
+  float worst_d;  // pruning distance: the k-th distance, or the limit while fewer than k
+  std::uint64_t* key;
   std::uint32_t* pos;
   const std::uint32_t* ids;
-  [[nodiscard]] float worst() const noexcept {
-    return count < k ? std::numeric_limits<float>::infinity() : d[k - 1];
-  }
+  KBest(int k_, float limit, std::uint64_t* key_, std::uint32_t* pos_, const std::uint32_t* ids_)
+      : k(k_), worst_d(limit), key(key_), pos(pos_), ids(ids_) {}
+  [[nodiscard]] float worst() const noexcept { return worst_d; }
   void offer(float dist, std::uint32_t p) noexcept {
+    const std::uint64_t kk = static_cast<std::uint64_t>(std::bit_cast<std::uint32_t>(dist)) << 32 | ids[p];
     if (count == k) {
-      if (dist > d[k - 1] || (dist == d[k - 1] && ids[p] >= ids[pos[k - 1]])) return;
+      if (kk >= key[k - 1]) return;
     } else {
       ++count;
     }
     int j = count - 1;
-    while (j > 0 && (d[j - 1] > dist || (d[j - 1] == dist && ids[pos[j - 1]] > ids[p]))) {
-      d[j] = d[j - 1];
+    while (j > 0 && key[j - 1] > kk) {
+      key[j] = key[j - 1];
       pos[j] = pos[j - 1];
       --j;
     }
-    d[j] = dist;
+    key[j] = kk;
     pos[j] = p;
+    if (count == k) worst_d = std::bit_cast<float>(static_cast<std::uint32_t>(key[k - 1] >> 32));
+  }
+  int finish(float* dist2) const noexcept {
+    for (int i = 0; i < count; ++i) dist2[i] = std::bit_cast<float>(static_cast<std::uint32_t>(key[i] >> 32));
+    return count;
   }
 };
 
@@ -115,11 +129,12 @@ void KdTree::build(PointsView points, const KdTreeSettings& settings) {
   if (m > 0) Builder{*this, items.data(), next}(0, m);
   nodes_.resize(next.load());
   node_count_ = next.load();
+  index_leaf_starts(m);
   pts_.resize(m);
   ids_.resize(m);
-  xs_.resize(m);
-  ys_.resize(m);
-  zs_.resize(m);
+  xs_.assign(m + kPad, 0.0f);
+  ys_.assign(m + kPad, 0.0f);
+  zs_.assign(m + kPad, 0.0f);
   for (std::uint32_t i = 0; i < m; ++i) {
     pts_[i] = items[i].p;
     ids_[i] = items[i].id;
@@ -130,8 +145,29 @@ void KdTree::build(PointsView points, const KdTreeSettings& settings) {
 }
 
 int KdTree::knn_tree(const Eigen::Vector3f& q, int k, std::uint32_t* tree_pos, float* dist2) const {
-  if (k <= 0 || pts_.empty() || !is_finite(q)) return 0;
-  KBest best{k, 0, dist2, tree_pos, ids_.data()};
+  return knn_tree(q, k, std::numeric_limits<float>::infinity(), tree_pos, dist2);
+}
+
+int KdTree::knn_tree(const Eigen::Vector3f& q, int k, float max_dist2, std::uint32_t* tree_pos, float* dist2) const {
+  return knn_impl(q, k, max_dist2, kNoHint, tree_pos, dist2);
+}
+
+int KdTree::knn_tree_near(const Eigen::Vector3f& q, int k, float max_dist2, std::uint32_t hint_pos,
+                          std::uint32_t* tree_pos, float* dist2) const {
+  return knn_impl(q, k, max_dist2, hint_pos < pts_.size() ? hint_pos : kNoHint, tree_pos, dist2);
+}
+
+int KdTree::knn_impl(const Eigen::Vector3f& q, int k, float max_dist2, std::uint32_t hint, std::uint32_t* tree_pos,
+                     float* dist2) const {
+  if (k <= 0 || pts_.empty() || !is_finite(q) || !(max_dist2 >= 0.0f)) return 0;
+  std::uint64_t local_keys[64];
+  std::vector<std::uint64_t> heap_keys;
+  std::uint64_t* keys = local_keys;
+  if (k > 64) {
+    heap_keys.resize(static_cast<std::size_t>(k));
+    keys = heap_keys.data();
+  }
+  KBest best(k, max_dist2, keys, tree_pos, ids_.data());
   // Depth-first search, nearer child first; off[] holds the squared distance components from q
   // to the current cell, so mindist is the exact squared distance from q to that cell.
   struct Frame {
@@ -141,31 +177,50 @@ int KdTree::knn_tree(const Eigen::Vector3f& q, int k, std::uint32_t* tree_pos, f
   };
   Frame stack[128];
   int top = 0;
-  stack[top++] = {0, 0.0f, {0.0f, 0.0f, 0.0f}};
+  // Searches the subtree of start (q's squared distance components to its cell in off), never
+  // entering the subtree of skip.
+  auto search = [&](std::uint32_t start, const float (&start_off)[3], std::uint32_t skip) {
+  stack[top++] = {start, start_off[0] + start_off[1] + start_off[2], {start_off[0], start_off[1], start_off[2]}};
   while (top > 0) {
     const Frame f = stack[--top];
-    if (f.mindist > best.worst()) continue;
+    if (f.mindist > best.worst() || f.node == skip) continue;
     std::uint32_t ni = f.node;
     float mindist = f.mindist;
     float off[3] = {f.off[0], f.off[1], f.off[2]};
     while (true) {
       const Node& nd = nodes_[ni];
       if (nd.dim < 0) {
-        // Distances of a whole leaf in one vectorisable loop, then the few candidates offered.
-        constexpr std::uint32_t kChunk = 32;
-        float d[kChunk];
-        for (std::uint32_t j0 = nd.a; j0 < nd.b; j0 += kChunk) {
-          const std::uint32_t m = std::min(kChunk, nd.b - j0);
-          const float* xs = xs_.data() + j0;
-          const float* ys = ys_.data() + j0;
-          const float* zs = zs_.data() + j0;
-          for (std::uint32_t t = 0; t < m; ++t) {
-            const float dx = xs[t] - q.x(), dy = ys[t] - q.y(), dz = zs[t] - q.z();
-            d[t] = dx * dx + (dy * dy + dz * dz);  // the order of Eigen's squaredNorm: identical values
+        // Eight distances at a time, then the few candidates within the current k-th distance
+        // offered (one mostly-not-taken branch per eight points). The SoA arrays are padded by
+        // kPad entries, so the loads past the leaf's end stay inside them; those lanes are masked.
+#if defined(__SSE2__)
+        const __m128 qx = _mm_set1_ps(q.x()), qy = _mm_set1_ps(q.y()), qz = _mm_set1_ps(q.z());
+        for (std::uint32_t j0 = nd.a; j0 < nd.b; j0 += 8) {
+          alignas(16) float d[8];
+          for (int h = 0; h < 2; ++h) {
+            const __m128 dx = _mm_sub_ps(_mm_loadu_ps(xs_.data() + j0 + 4 * h), qx);
+            const __m128 dy = _mm_sub_ps(_mm_loadu_ps(ys_.data() + j0 + 4 * h), qy);
+            const __m128 dz = _mm_sub_ps(_mm_loadu_ps(zs_.data() + j0 + 4 * h), qz);
+            // dx^2 + (dy^2 + dz^2): the order of Eigen's squaredNorm, identical values
+            _mm_store_ps(d + 4 * h, _mm_add_ps(_mm_mul_ps(dx, dx), _mm_add_ps(_mm_mul_ps(dy, dy), _mm_mul_ps(dz, dz))));
           }
-          for (std::uint32_t t = 0; t < m; ++t)
+          const __m128 w = _mm_set1_ps(best.worst());
+          unsigned mask = static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(_mm_load_ps(d), w))) |
+                          static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(_mm_load_ps(d + 4), w))) << 4;
+          if (nd.b - j0 < 8) mask &= (1u << (nd.b - j0)) - 1u;
+          while (mask != 0) {
+            const std::uint32_t t = static_cast<std::uint32_t>(std::countr_zero(mask));
+            mask &= mask - 1;
             if (d[t] <= best.worst()) best.offer(d[t], j0 + t);
+          }
         }
+#else
+        for (std::uint32_t j = nd.a; j < nd.b; ++j) {
+          const float dx = xs_[j] - q.x(), dy = ys_[j] - q.y(), dz = zs_[j] - q.z();
+          const float d = dx * dx + (dy * dy + dz * dz);
+          if (d <= best.worst()) best.offer(d, j);
+        }
+#endif
         break;
       }
       const float diff = q[nd.dim] - nd.split;
@@ -178,10 +233,72 @@ int KdTree::knn_tree(const Eigen::Vector3f& q, int k, std::uint32_t* tree_pos, f
         g.off[nd.dim] = d2;
         stack[top++] = g;
       }
+      if (near == skip) break;
       ni = near;
     }
   }
-  return best.count;
+  };
+  constexpr float kZero[3] = {0.0f, 0.0f, 0.0f};
+  if (hint == kNoHint) {
+    search(0, kZero, kNoHint);
+    return best.finish(dist2);
+  }
+  // From the hint's neighbourhood: search the subtree of an ancestor of its leaf first. If q's
+  // k-th distance then lies strictly inside that subtree's cell, nothing outside can be nearer
+  // (points outside the cell are at least the boundary distance away; a point exactly on a split
+  // plane may sit in either child, hence "strictly"). Otherwise the rest of the tree follows.
+  const LeafStart& ls = leaf_start_[leaf_of_[hint]];
+  float off[3];
+  float inside = std::numeric_limits<float>::infinity();  // distance from q to the cell's boundary
+  for (int d = 0; d < 3; ++d) {
+    const float below = ls.lo[d] - q[d], above = q[d] - ls.hi[d];
+    const float out = std::max({0.0f, below, above});
+    off[d] = out * out;
+    inside = std::min(inside, std::min(-below, -above));
+  }
+  search(ls.node, off, kNoHint);
+  if (best.count == k && inside > 0.0f && inside * inside > best.worst() * 1.0001f) return best.finish(dist2);  // margin: float round-off
+  search(0, kZero, ls.node);
+  return best.finish(dist2);
+}
+
+void KdTree::index_leaf_starts(std::uint32_t m) {
+  // For every leaf: the ancestor kStartUp levels above it (or the root) and that ancestor's
+  // cell (the region its splits bound; unbounded sides are infinite).
+  constexpr int kStartUp = 3;
+  leaf_start_.clear();
+  leaf_of_.assign(m, 0);
+  if (m == 0) return;
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  struct Visit {
+    std::uint32_t node;
+    int depth;
+    Eigen::Vector3f lo, hi;
+  };
+  std::vector<Visit> path;  // current root-to-node path (explicit DFS keeps cells)
+  std::vector<Visit> todo{{0, 0, Eigen::Vector3f::Constant(-kInf), Eigen::Vector3f::Constant(kInf)}};
+  while (!todo.empty()) {
+    const Visit it = todo.back();
+    todo.pop_back();
+    while (!path.empty() && path.back().depth >= it.depth) path.pop_back();
+    path.push_back(it);
+    const Node& nd = nodes_[it.node];
+    if (nd.dim < 0) {
+      const Visit& anc = path[path.size() > kStartUp ? path.size() - 1 - kStartUp : 0];
+      const auto leaf = static_cast<std::uint32_t>(leaf_start_.size());
+      leaf_start_.push_back({anc.node, anc.lo, anc.hi});
+      for (std::uint32_t j = nd.a; j < nd.b; ++j) leaf_of_[j] = leaf;
+      continue;
+    }
+    Visit l = it, r = it;
+    l.node = nd.a;
+    r.node = nd.b;
+    l.depth = r.depth = it.depth + 1;
+    l.hi[nd.dim] = nd.split;
+    r.lo[nd.dim] = nd.split;
+    todo.push_back(r);
+    todo.push_back(l);
+  }
 }
 
 int KdTree::knn(const Eigen::Vector3f& q, int k, std::uint32_t* idx, float* dist2) const {

@@ -5,6 +5,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -98,9 +99,20 @@ void estimate_normals(PointsView points, const KdTree& tree, const NormalSetting
   detail::for_blocks(tp.size(), 1024, [&](std::size_t, std::size_t begin, std::size_t end) {
     std::uint32_t pos[256];
     float d2[256];
+    int prev = 0;  // neighbours of the previous query (tree positions in pos)
     for (std::size_t j = begin; j < end; ++j) {
       const Eigen::Vector3f& q = tp[j];
-      const int c = tree.knn_tree(q, k, pos, d2);
+      // The previous query's k neighbours are k points: the farthest of them from q bounds q's
+      // k-th distance, so the bounded search returns exactly the unbounded result. The margin
+      // covers a different rounding of the same distance in the search (e.g. FMA contraction).
+      float bound = std::numeric_limits<float>::infinity();
+      if (prev == k) {
+        float far = 0.0f;
+        for (int i = 0; i < k; ++i) far = std::max(far, (tp[pos[i]] - q).squaredNorm());
+        bound = far * 1.0001f + std::numeric_limits<float>::min();
+      }
+      const int c = tree.knn_tree_near(q, k, bound, static_cast<std::uint32_t>(j), pos, d2);
+      prev = c;
       Eigen::Vector3f nrm;
       float curv;
       if (normal_of(c, [&](int i) -> const Eigen::Vector3f& { return tp[pos[i]]; }, nrm, curv)) {

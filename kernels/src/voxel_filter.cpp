@@ -4,11 +4,18 @@
 #include "parallel.hpp"
 #include "radix_sort.hpp"
 
+#include <tbb/task_arena.h>
+
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <string>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace duet {
 
@@ -22,69 +29,278 @@ void validate(const VoxelFilterSettings& s) {
 
 namespace {
 
-using Map = detail::VoxelAccumMap;
-constexpr std::size_t kBlock = 1 << 15;
-constexpr std::uint64_t kEmpty = std::numeric_limits<std::uint64_t>::max();
-
-// floor() for |x| < 2^31 without a libm call (x86-64 baseline has no SSE4.1 round): the same
-// value as std::floor, so voxel assignment matches pcl::VoxelGrid exactly.
-inline std::int64_t fast_floor(float x) {
-  const auto i = static_cast<std::int32_t>(x);
-  return static_cast<std::int64_t>(i - (x < static_cast<float>(i) ? 1 : 0));
-}
-
-void map_reset(Map& m, std::size_t expected) {
-  const std::size_t cap = std::bit_ceil(std::max<std::size_t>(64, 2 * expected));
-  m.slot_key.assign(cap, kEmpty);
-  m.slot_index.resize(cap);
-  m.mask = cap - 1;
-  m.shift = 64 - std::countr_zero(cap);
-  m.keys.clear();
-  m.acc.clear();
-}
-
-std::uint32_t map_insert(Map& m, std::uint64_t key);
-
-void map_grow(Map& m) {
-  const std::size_t cap = 2 * m.slot_key.size();
-  m.slot_key.assign(cap, kEmpty);
-  m.slot_index.resize(cap);
-  m.mask = cap - 1;
-  m.shift = 64 - std::countr_zero(cap);
-  for (std::size_t i = 0; i < m.keys.size(); ++i) {
-    std::uint64_t h = (m.keys[i] * 0x9E3779B97F4A7C15ull) >> m.shift;
-    while (m.slot_key[h] != kEmpty) h = (h + 1) & m.mask;
-    m.slot_key[h] = m.keys[i];
-    m.slot_index[h] = static_cast<std::uint32_t>(i);
-  }
-}
-
-inline std::uint32_t map_insert(Map& m, std::uint64_t key) {
-  std::uint64_t h = (key * 0x9E3779B97F4A7C15ull) >> m.shift;
-  while (true) {
-    const std::uint64_t k = m.slot_key[h];
-    if (k == key) return m.slot_index[h];
-    if (k == kEmpty) break;
-    h = (h + 1) & m.mask;
-  }
-  if (2 * (m.keys.size() + 1) > m.slot_key.size()) {
-    map_grow(m);
-    return map_insert(m, key);
-  }
-  const auto idx = static_cast<std::uint32_t>(m.keys.size());
-  m.slot_key[h] = key;
-  m.slot_index[h] = idx;
-  m.keys.push_back(key);
-  m.acc.emplace_back();
-  return idx;
-}
-
-struct Bounds {
-  Eigen::Vector3f lo{std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity(),
-                     std::numeric_limits<float>::infinity()};
-  Eigen::Vector3f hi = -lo;
-  std::size_t finite = 0;
+struct Cell {
+  std::int32_t x = 0, y = 0, z = 0;
+  friend bool operator==(const Cell&, const Cell&) = default;
 };
+constexpr std::size_t kBlock = 1 << 15;
+constexpr std::int32_t kBadIndex = std::numeric_limits<std::int32_t>::min();  // cvttss2si's "invalid"
+
+// floor(s) as int32 as the x86 conversion does it: kBadIndex when s is NaN, infinite or
+// outside [-2^31, 2^31) - the same rule as the vector path below.
+inline std::int32_t floor_index(float s) {
+  if (!(s >= -2147483648.0f && s < 2147483648.0f)) return kBadIndex;
+  const auto i = static_cast<std::int32_t>(s);
+  return i - (s < static_cast<float>(i) ? 1 : 0);
+}
+
+// --- per-thread tables: integer cell -> sums, in the slot ------------------------------------
+using Table = detail::VoxelCellTable;
+using Sums = detail::VoxelCellSums;
+using Block = detail::VoxelBlock;
+
+inline std::uint64_t cell_hash(std::int32_t x, std::int32_t y, std::int32_t z, int shift) {
+  const std::uint64_t h = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(x)) |
+                           static_cast<std::uint64_t>(static_cast<std::uint32_t>(y)) << 32) *
+                              0x9E3779B97F4A7C15ull ^
+                          static_cast<std::uint64_t>(static_cast<std::uint32_t>(z)) * 0xC2B2AE3D27D4EB4Full;
+  return h >> shift;
+}
+
+void table_resize(Table& t, std::size_t cap) {
+  t.slots.assign(cap, Table::Slot{});
+  t.mask = cap - 1;
+  t.shift = 64 - std::countr_zero(cap);
+}
+
+[[gnu::noinline]] void table_grow(Table& t) {
+  std::vector<Table::Slot> old(2 * t.slots.size());
+  old.swap(t.slots);
+  t.mask = t.slots.size() - 1;
+  t.shift = 64 - std::countr_zero(t.slots.size());
+  for (std::uint32_t& u : t.used) {
+    const Sums& s = old[u].s;
+    std::uint64_t h = cell_hash(s.x, s.y, s.z, t.shift);
+    while (t.slots[h].s.count != 0) h = (h + 1) & t.mask;
+    t.slots[h].s = s;
+    u = static_cast<std::uint32_t>(h);
+  }
+}
+
+// Sums of one run of consecutive points in the same voxel (neighbouring pixels), added to the
+// block's table once per run. Point sums in double, in input order.
+struct Run {
+  Cell cell{};
+  bool open = false;
+  std::uint64_t hash = 0;
+  double sx = 0, sy = 0, sz = 0;
+  std::uint32_t sr = 0, sg = 0, sb = 0, count = 0;
+};
+
+// A finished run goes into the block's hash table (open addressing, linear probing, load <= 1/2).
+// Callers prefetch the slot (run.hash) early: runs average ~4 points on Kinect frames, so the
+// table's L2 latency would otherwise be paid every few points.
+inline void flush(Table& t, Run& run) {
+  if (!run.open) return;
+  std::uint64_t h = run.hash;
+  while (true) {
+    Sums& s = t.slots[h].s;
+    if (s.count == 0) {
+      if (2 * (t.used.size() + 1) > t.slots.size()) [[unlikely]] {
+        table_grow(t);
+        run.hash = cell_hash(run.cell.x, run.cell.y, run.cell.z, t.shift);
+        flush(t, run);
+        return;
+      }
+      s.x = run.cell.x;
+      s.y = run.cell.y;
+      s.z = run.cell.z;
+      t.used.push_back(static_cast<std::uint32_t>(h));
+      break;
+    }
+    if (s.x == run.cell.x && s.y == run.cell.y && s.z == run.cell.z) break;
+    h = (h + 1) & t.mask;
+  }
+  Sums& s = t.slots[h].s;
+  s.sx += run.sx;
+  s.sy += run.sy;
+  s.sz += run.sz;
+  s.r += run.sr;
+  s.g += run.sg;
+  s.b += run.sb;
+  s.count += run.count;
+  run = Run{};
+}
+
+// Starts a run in cell c and prefetches the cell's table slot.
+inline void begin_run(const Table& t, Run& run, const Cell& c) {
+  run.cell = c;
+  run.open = true;
+  run.hash = cell_hash(c.x, c.y, c.z, t.shift);
+  __builtin_prefetch(&t.slots[run.hash], 1);
+}
+
+// A point whose cell has a kBadIndex coordinate: skipped if not finite (as PCL), otherwise its
+// voxel index does not fit: the first such coordinate of the block is kept for the error.
+inline void reject(Block& m, const float* p, const std::int32_t* idx) {
+  if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) return;
+  for (int a = 0; a < 3; ++a) {
+    if (idx[a] == kBadIndex && !m.out_of_range) {
+      m.out_of_range = true;
+      m.bad_value = p[a];
+      m.bad_axis = a;
+    }
+  }
+}
+
+#if defined(__SSE2__)
+using RunRecord = detail::VoxelRunRecord;
+static_assert(sizeof(RunRecord) == 64);
+
+// The hot loop, in two phases per chunk of points, with no data-dependent branch in phase 1:
+//  1. one point per iteration in one SSE register (x, y, z, 0): floor of the three coordinates
+//     in four instructions; "same voxel as the previous point" as an all-lanes mask that both
+//     resets the running sums at a run start (sums = (sums & same) + point) and advances the
+//     run counter (k += 1 + same), so runs are written out without a branch. Kinect runs
+//     average ~4 points, where a branch per run would mispredict every few points.
+//  2. the chunk's runs go into the block's hash table, the slot of a later run prefetched.
+// Reads 16 bytes per point: the caller keeps [begin, end) where that stays inside the view.
+template <bool kColor>
+std::size_t vector_points(PointsView points, ColorsView colors, float inv, std::size_t begin, std::size_t end,
+                          Table& table, Block& m, std::vector<RunRecord>& runs) {
+  constexpr std::size_t kChunk = 2048;
+  const __m128 vinv = _mm_set1_ps(inv);
+  const __m128 xyz_mask = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+  const __m128i bad = _mm_set1_epi32(kBadIndex);
+  const __m128i one_count = _mm_setr_epi32(0, 0, 0, 1);
+  const std::byte* base = reinterpret_cast<const std::byte*>(points.ptr(0));
+  const std::size_t stride = points.stride_bytes();
+  if (runs.size() < kChunk + 1) runs.resize(kChunk + 1);
+  for (std::size_t c0 = begin; c0 < end; c0 += kChunk) {
+    const std::size_t c1 = std::min(end, c0 + kChunk);
+    // Phase 1. runs[k] holds the current run; a chunk starts a new run (k = 0 at its first point).
+    RunRecord* rec = runs.data();
+    std::size_t k = std::numeric_limits<std::size_t>::max();  // k + 1 == 0 at the first run
+    __m128i prev = bad;  // no valid cell equals it: the first point starts a run
+    __m128d sxy = _mm_setzero_pd(), sz = _mm_setzero_pd();
+    __m128i ci = _mm_setzero_si128();  // r, g, b, count
+    for (std::size_t i = c0; i < c1; ++i) {
+      const float* p = reinterpret_cast<const float*>(base + i * stride);
+      const __m128 v = _mm_and_ps(_mm_loadu_ps(p), xyz_mask);
+      const __m128 s = _mm_mul_ps(v, vinv);
+      __m128i t = _mm_cvttps_epi32(s);
+      if (_mm_movemask_epi8(_mm_cmpeq_epi32(t, bad)) & 0x0FFF) [[unlikely]] {
+        alignas(16) std::int32_t idx[4];
+        _mm_store_si128(reinterpret_cast<__m128i*>(idx), t);
+        for (int a = 0; a < 3; ++a) idx[a] = idx[a] == kBadIndex ? kBadIndex : floor_index(s[a]);
+        reject(m, p, idx);
+        continue;
+      }
+      // floor: truncation rounds negative non-integers up; subtract 1 there (mask = -1).
+      t = _mm_add_epi32(t, _mm_castps_si128(_mm_cmplt_ps(s, _mm_cvtepi32_ps(t))));
+      __m128i same = _mm_cmpeq_epi32(t, prev);
+      same = _mm_and_si128(same, _mm_shuffle_epi32(same, _MM_SHUFFLE(2, 3, 0, 1)));
+      same = _mm_and_si128(same, _mm_shuffle_epi32(same, _MM_SHUFFLE(1, 0, 3, 2)));  // all lanes: all equal
+      k += static_cast<std::size_t>(1 + _mm_cvtsi128_si32(same));                       // +1 at a run start
+      prev = t;
+      const __m128d same_pd = _mm_castsi128_pd(same);
+      sxy = _mm_add_pd(_mm_and_pd(sxy, same_pd), _mm_cvtps_pd(v));
+      sz = _mm_add_pd(_mm_and_pd(sz, same_pd), _mm_cvtps_pd(_mm_movehl_ps(v, v)));
+      __m128i add = one_count;
+      if constexpr (kColor) {
+        const std::uint8_t* c = colors.ptr(i);
+        const int rgb = c[0] | c[1] << 8 | c[2] << 16 | 1 << 24;
+        const __m128i zero = _mm_setzero_si128();
+        add = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(rgb), zero), zero);
+      }
+      ci = _mm_add_epi32(_mm_and_si128(ci, same), add);
+      auto* out = reinterpret_cast<__m128i*>(rec + k);
+      _mm_store_si128(out, t);
+      _mm_store_pd(reinterpret_cast<double*>(out + 1), sxy);
+      _mm_store_pd(reinterpret_cast<double*>(out + 2), sz);
+      _mm_store_si128(out + 3, ci);
+    }
+    // Phase 2: the runs into the table (independent lookups; prefetch a few runs ahead).
+    const std::size_t nruns = k + 1;  // 0 when every point of the chunk was rejected
+    constexpr std::size_t kAhead = 8;
+    for (std::size_t r = 0; r < std::min(kAhead, nruns); ++r)
+      __builtin_prefetch(&table.slots[cell_hash(rec[r].x, rec[r].y, rec[r].z, table.shift)], 1);
+    for (std::size_t r = 0; r < nruns; ++r) {
+      if (r + kAhead < nruns) {
+        const RunRecord& f = rec[r + kAhead];
+        __builtin_prefetch(&table.slots[cell_hash(f.x, f.y, f.z, table.shift)], 1);
+      }
+      const RunRecord& q = rec[r];
+      Run run;
+      run.cell = Cell{q.x, q.y, q.z};
+      run.open = true;
+      run.hash = cell_hash(q.x, q.y, q.z, table.shift);
+      run.sx = q.sx;
+      run.sy = q.sy;
+      run.sz = q.sz;
+      run.sr = q.r;
+      run.sg = q.g;
+      run.sb = q.b;
+      run.count = q.count;
+      flush(table, run);
+    }
+  }
+  return end;
+}
+#endif
+
+// Accumulates points [begin, end) into the block map m. Voxel of p: floor(p * inv) per axis in
+// float, exactly as pcl::VoxelGrid (its floor(p[a] * inverse_leaf_size_[a])).
+void accumulate_block(PointsView points, ColorsView colors, float inv, std::size_t begin, std::size_t end,
+                      Table& table, Block& m) {
+  const bool with_color = !colors.empty();
+  Run run;
+  auto add_color = [&](std::size_t i) {
+    if (with_color) {
+      const std::uint8_t* c = colors.ptr(i);
+      run.sr += c[0];
+      run.sg += c[1];
+      run.sb += c[2];
+    }
+  };
+  auto scalar_point = [&](std::size_t i) {
+    const float* p = points.ptr(i);
+    const std::int32_t idx[3] = {floor_index(p[0] * inv), floor_index(p[1] * inv), floor_index(p[2] * inv)};
+    if (idx[0] == kBadIndex || idx[1] == kBadIndex || idx[2] == kBadIndex) {
+      reject(m, p, idx);
+      return;
+    }
+    const Cell c{idx[0], idx[1], idx[2]};
+    if (!run.open || !(c == run.cell)) {
+      flush(table, run);
+      begin_run(table, run, c);
+    }
+    run.sx += static_cast<double>(p[0]);
+    run.sy += static_cast<double>(p[1]);
+    run.sz += static_cast<double>(p[2]);
+    ++run.count;
+    add_color(i);
+  };
+  std::size_t i = begin;
+#if defined(__SSE2__)
+  // A 16-byte load reads 4 bytes past the point, so the last point(s) of the view (when the
+  // stride is < 16 bytes) take the scalar path.
+  const std::size_t stride = points.stride_bytes();
+  // Points whose 16-byte load stays inside the view: i * stride + 16 <= (n - 1) * stride + 12.
+  const std::size_t n = points.size();
+  const std::size_t tail = stride >= 16 ? 0 : stride == 0 ? n : (4 + stride - 1) / stride;
+  const std::size_t vec_end = std::min(end, n > tail ? n - tail : 0);
+  if (i < vec_end) {
+    i = with_color ? vector_points<true>(points, colors, inv, i, vec_end, table, m, table.runs)
+                   : vector_points<false>(points, colors, inv, i, vec_end, table, m, table.runs);
+  }
+#endif
+  for (; i < end; ++i) scalar_point(i);
+  flush(table, run);
+  // Hand the block's cells over in first-seen order and leave the table empty for the next block.
+  m.cells.resize(table.used.size());
+  std::int32_t lo[3] = {INT32_MAX, INT32_MAX, INT32_MAX}, hi[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
+  for (std::size_t k = 0; k < table.used.size(); ++k) {
+    Sums& s = table.slots[table.used[k]].s;
+    m.cells[k] = s;
+    lo[0] = std::min(lo[0], s.x), hi[0] = std::max(hi[0], s.x);
+    lo[1] = std::min(lo[1], s.y), hi[1] = std::max(hi[1], s.y);
+    lo[2] = std::min(lo[2], s.z), hi[2] = std::max(hi[2], s.z);
+    s = Sums{};
+  }
+  table.used.clear();
+  for (int a = 0; a < 3; ++a) m.lo[a] = lo[a], m.hi[a] = hi[a];
+}
 
 }  // namespace
 
@@ -112,187 +328,142 @@ void voxel_filter(PointsView points, ColorsView colors, const VoxelFilterSetting
   }
   out.clear();
   if (n == 0) return;
-
-  // 1. Bounds of the finite points (min/max are exact: the reduction order does not matter).
-  //    The fast pass takes every finite coordinate, also of points with a NaN in another one;
-  //    that only widens the box, and if the wider box fails the range check below, the bounds
-  //    are recomputed from the finite points alone before any error is raised.
-  auto exact_bounds = [&](std::size_t begin, std::size_t end) {
-    Bounds bb;
-    for (std::size_t i = begin; i < end; ++i) {
-      const Eigen::Vector3f q = points[i];
-      if (!is_finite(q)) continue;
-      bb.lo = bb.lo.cwiseMin(q);
-      bb.hi = bb.hi.cwiseMax(q);
-      ++bb.finite;
-    }
-    return bb;
-  };
-  const std::size_t nb = detail::block_count(n, kBlock);
-  std::vector<Bounds> block_bounds(nb);
-  detail::for_blocks(n, kBlock, [&](std::size_t b, std::size_t begin, std::size_t end) {
-    // Plain float min/max: written as (x < lo ? x : lo), a NaN never replaces a bound.
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (std::size_t i = begin; i < end; ++i) {
-      const float* p = points.ptr(i);
-      for (int a = 0; a < 3; ++a) {
-        lo[a] = p[a] < lo[a] ? p[a] : lo[a];
-        hi[a] = p[a] > hi[a] ? p[a] : hi[a];
-      }
-    }
-    Bounds bb;
-    bb.lo = Eigen::Vector3f(lo[0], lo[1], lo[2]);
-    bb.hi = Eigen::Vector3f(hi[0], hi[1], hi[2]);
-    if (!bb.lo.allFinite() || !bb.hi.allFinite()) {  // an infinite point (or none finite): exact pass
-      bb = exact_bounds(begin, end);
-    } else {
-      bb.finite = 1;  // at least one finite point (the exact count is not needed)
-    }
-    block_bounds[b] = bb;
-  });
-  Bounds all;
-  for (const auto& bb : block_bounds) {
-    if (bb.finite == 0) continue;
-    all.lo = all.lo.cwiseMin(bb.lo);
-    all.hi = all.hi.cwiseMax(bb.hi);
-    all.finite += bb.finite;
-  }
-  if (all.finite == 0) return;
-
-  // 2. Voxel index range, exactly as pcl::VoxelGrid: floor(p * inverse_leaf) in float.
   const float inv = 1.0f / settings.leaf_size_m;
-  constexpr float kLimit = 2147483520.0f;  // largest float below 2^31
-  auto in_range = [&](const Bounds& b) {
-    for (int a = 0; a < 3; ++a)
-      if (!(std::fabs(b.lo[a] * inv) < kLimit) || !(std::fabs(b.hi[a] * inv) < kLimit)) return false;
-    return true;
-  };
-  if (!in_range(all)) {
-    all = exact_bounds(0, n);
-    if (all.finite == 0) return;
-  }
-  std::int64_t min_b[3], div[3];
-  for (int a = 0; a < 3; ++a) {
-    const float lo = all.lo[a] * inv, hi = all.hi[a] * inv;
-    if (!(std::fabs(lo) < kLimit) || !(std::fabs(hi) < kLimit))
-      fail(ErrorCode::kOutOfRange, "voxel_filter: coordinate " +
-                                       std::to_string(std::fabs(lo) > std::fabs(hi) ? all.lo[a] : all.hi[a]) +
-                                       " m on axis " + "xyz"[a] + " is too large for a voxel index at leaf " +
+
+  // 1. Per fixed block: sums per integer voxel cell, in one pass over the points (no separate
+  //    bounds pass: the cells' range is found from the distinct cells afterwards).
+  const std::size_t nb = detail::block_count(n, kBlock);
+  if (ws.blocks.size() < nb) ws.blocks.resize(nb);
+  const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
+  if (ws.tables.size() < threads) ws.tables.resize(threads);
+  for (Table& t : ws.tables)
+    if (t.slots.empty()) table_resize(t, 1024);
+  detail::for_blocks(n, kBlock, [&](std::size_t b, std::size_t begin, std::size_t end) {
+    Block& m = ws.blocks[b];
+    m.out_of_range = false;
+    const auto thread = static_cast<std::size_t>(tbb::this_task_arena::current_thread_index());
+    accumulate_block(points, colors, inv, begin, end, ws.tables[thread], m);
+  });
+
+  // 2. Range: any finite coordinate with |p / leaf| >= 2^31 is an error (the first one in input
+  //    order is reported), as is a bounding box of more than 2^63 voxels. Never a wrong result.
+  std::int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
+  ws.offsets.resize(nb + 1);
+  std::size_t ncells = 0;
+  for (std::size_t b = 0; b < nb; ++b) {
+    const Block& m = ws.blocks[b];
+    if (m.out_of_range)
+      fail(ErrorCode::kOutOfRange, "voxel_filter: coordinate " + std::to_string(m.bad_value) + " m on axis " +
+                                       "xyz"[m.bad_axis] + " is too large for a voxel index at leaf " +
                                        std::to_string(settings.leaf_size_m) + " m (|p / leaf| must be < 2^31)");
-    min_b[a] = fast_floor(lo);
-    div[a] = fast_floor(hi) - min_b[a] + 1;
+    ws.offsets[b] = ncells;
+    ncells += m.cells.size();
+    if (m.cells.empty()) continue;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min<std::int64_t>(lo[a], m.lo[a]);
+      hi[a] = std::max<std::int64_t>(hi[a], m.hi[a]);
+    }
   }
+  ws.offsets[nb] = ncells;
+  if (ncells == 0) return;  // no finite point
   std::uint64_t total = 0, dxy = 0;
-  const bool overflow =
-      __builtin_mul_overflow(static_cast<std::uint64_t>(div[0]), static_cast<std::uint64_t>(div[1]), &dxy) ||
-      __builtin_mul_overflow(dxy, static_cast<std::uint64_t>(div[2]), &total) || total >= (std::uint64_t{1} << 63);
+  const auto div = [&](int a) { return static_cast<std::uint64_t>(hi[a] - lo[a] + 1); };
+  const bool overflow = __builtin_mul_overflow(div(0), div(1), &dxy) ||
+                        __builtin_mul_overflow(dxy, div(2), &total) || total >= (std::uint64_t{1} << 63);
   if (overflow)
     fail(ErrorCode::kOutOfRange, "voxel_filter: the bounding box holds more than 2^63 voxels at leaf " +
                                      std::to_string(settings.leaf_size_m) + " m; the voxel index would overflow");
-  const std::uint64_t mul_y = static_cast<std::uint64_t>(div[0]);
-  const std::uint64_t mul_z = dxy;
 
-  // 3. Per block: sums per voxel (key = z-major linear voxel index, PCL's order).
-  if (ws.blocks.size() < nb) ws.blocks.resize(nb);
-  detail::for_blocks(n, kBlock, [&](std::size_t b, std::size_t begin, std::size_t end) {
-    Map& m = ws.blocks[b];
-    map_reset(m, std::max<std::size_t>(m.keys.size(), 256));
-    // Runs of consecutive points in one voxel (neighbouring pixels) are summed in registers and
-    // added to the map once per run.
-    std::uint64_t run_key = kEmpty;
-    double sx = 0, sy = 0, sz = 0;
-    std::uint64_t sr = 0, sg = 0, sb = 0;
-    std::uint32_t sc = 0;
-    auto flush = [&] {
-      if (sc == 0) return;
-      auto& a = m.acc[map_insert(m, run_key)];
-      a.x += sx;
-      a.y += sy;
-      a.z += sz;
-      a.r += sr;
-      a.g += sg;
-      a.b += sb;
-      a.count += sc;
-      sx = sy = sz = 0;
-      sr = sg = sb = 0;
-      sc = 0;
-    };
-    for (std::size_t i = begin; i < end; ++i) {
-      const float* p = points.ptr(i);
-      if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) continue;
-      const auto ix = static_cast<std::uint64_t>(fast_floor(p[0] * inv) - min_b[0]);
-      const auto iy = static_cast<std::uint64_t>(fast_floor(p[1] * inv) - min_b[1]);
-      const auto iz = static_cast<std::uint64_t>(fast_floor(p[2] * inv) - min_b[2]);
-      const std::uint64_t key = ix + iy * mul_y + iz * mul_z;
-      if (key != run_key) {
-        flush();
-        run_key = key;
-      }
-      sx += p[0];
-      sy += p[1];
-      sz += p[2];
-      ++sc;
-      if (with_color) {
-        const std::uint8_t* c = colors.ptr(i);
-        sr += c[0];
-        sg += c[1];
-        sb += c[2];
-      }
+  // 3. Linear voxel index of every block cell, z-major (PCL's order):
+  //    (x - min_x) + (y - min_y) * div_x + (z - min_z) * div_x * div_y; then a stable sort by index,
+  //    so the cells of one voxel end up together in block order (deterministic sums).
+  const std::uint64_t mul_y = div(0), mul_z = dxy;
+  ws.keys.resize(ncells);
+  ws.order.resize(ncells);
+  detail::for_blocks(nb, 1, [&](std::size_t b, std::size_t, std::size_t) {
+    const auto& cells = ws.blocks[b].cells;
+    const std::size_t off = ws.offsets[b];
+    for (std::size_t k = 0; k < cells.size(); ++k) {
+      const Sums& c = cells[k];
+      ws.keys[off + k] = static_cast<std::uint64_t>(c.x - lo[0]) + static_cast<std::uint64_t>(c.y - lo[1]) * mul_y +
+                         static_cast<std::uint64_t>(c.z - lo[2]) * mul_z;
+      ws.order[off + k] = static_cast<std::uint32_t>(off + k);
     }
-    flush();
   });
-
-  // 4. Merge the blocks in block order (deterministic sums), then sort the distinct voxels.
-  Map* merged = &ws.blocks[0];
-  if (nb > 1) {
-    std::size_t expected = 0;
-    for (std::size_t b = 0; b < nb; ++b) expected = std::max(expected, ws.blocks[b].keys.size());
-    map_reset(ws.merged, 2 * expected);
-    for (std::size_t b = 0; b < nb; ++b) {
-      const Map& m = ws.blocks[b];
-      for (std::size_t v = 0; v < m.keys.size(); ++v) {
-        auto& dst = ws.merged.acc[map_insert(ws.merged, m.keys[v])];
-        const auto& src = m.acc[v];
-        dst.x += src.x;
-        dst.y += src.y;
-        dst.z += src.z;
-        dst.r += src.r;
-        dst.g += src.g;
-        dst.b += src.b;
-        dst.count += src.count;
-      }
-    }
-    merged = &ws.merged;
-  }
-  const std::size_t nvox = merged->keys.size();
-  ws.keys.assign(merged->keys.begin(), merged->keys.end());
-  ws.order.resize(nvox);
-  for (std::size_t v = 0; v < nvox; ++v) ws.order[v] = static_cast<std::uint32_t>(v);
   detail::radix_sort_pairs(ws.keys, ws.order, ws.keys_tmp, ws.order_tmp, total - 1);
 
-  // 5. Centroids and mean colours in voxel order; voxels below min_points_per_voxel dropped.
-  const auto& acc = merged->acc;
+  // 4. Voxels = runs of equal keys. Fixed chunks of the sorted cells (a voxel belongs to the
+  //    chunk where its run starts); pass A counts the kept voxels per chunk, pass B writes the
+  //    centroids and mean colours at their prefix offsets. Voxels below min_points_per_voxel
+  //    are dropped.
+  ws.cell_ptr.resize(ncells);
+  detail::for_blocks(nb, 1, [&](std::size_t b, std::size_t, std::size_t) {
+    const auto& cells = ws.blocks[b].cells;
+    const std::size_t off = ws.offsets[b];
+    for (std::size_t k = 0; k < cells.size(); ++k) ws.cell_ptr[off + k] = &cells[k];
+  });
+  constexpr std::size_t kChunk = 4096;
+  const std::size_t nchunks = detail::block_count(ncells, kChunk);
   const std::uint32_t min_pts = settings.min_points_per_voxel;
-  std::size_t kept = nvox;
-  if (min_pts > 1) {
-    std::size_t o = 0;
-    for (std::size_t v = 0; v < nvox; ++v)
-      if (acc[ws.order[v]].count >= min_pts) ws.order[o++] = ws.order[v];
-    kept = o;
-  }
+  ws.chunk_kept.assign(nchunks + 1, 0);
+  const auto* keys = ws.keys.data();
+  const auto* order = ws.order.data();
+  const auto* ptrs = ws.cell_ptr.data();
+  // Calls fn(first, last) for each voxel whose run of sorted cells starts in [begin, end).
+  auto for_voxels = [&](std::size_t begin, std::size_t end, auto&& fn) {
+    std::size_t j = begin;
+    while (j < end && j > 0 && keys[j] == keys[j - 1]) ++j;  // run started in the previous chunk
+    while (j < end) {
+      std::size_t e = j + 1;
+      while (e < ncells && keys[e] == keys[j]) ++e;
+      fn(j, e);
+      j = e;
+    }
+  };
+  auto count_of = [&](std::size_t first, std::size_t last) {
+    std::uint64_t c = 0;
+    for (std::size_t j = first; j < last; ++j) c += ptrs[order[j]]->count;
+    return c;
+  };
+  detail::for_blocks(ncells, kChunk, [&](std::size_t c, std::size_t begin, std::size_t end) {
+    std::size_t kept = 0;
+    if (min_pts <= 1) {  // every voxel is kept: count the runs from the keys alone
+      for (std::size_t j = begin; j < end; ++j) kept += (j == 0 || keys[j] != keys[j - 1]) ? 1u : 0u;
+    } else {
+      for_voxels(begin, end, [&](std::size_t first, std::size_t last) { kept += count_of(first, last) >= min_pts ? 1u : 0u; });
+    }
+    ws.chunk_kept[c + 1] = kept;
+  });
+  for (std::size_t c = 0; c < nchunks; ++c) ws.chunk_kept[c + 1] += ws.chunk_kept[c];
+  const std::size_t kept = ws.chunk_kept[nchunks];
   out.points.resize(kept);
   if (with_color) out.colors.resize(kept);
-  detail::for_blocks(kept, 4096, [&](std::size_t, std::size_t begin, std::size_t end) {
-    for (std::size_t v = begin; v < end; ++v) {
-      const auto& a = acc[ws.order[v]];
-      const double c = a.count;
-      out.points[v] = Eigen::Vector3f(static_cast<float>(a.x / c), static_cast<float>(a.y / c), static_cast<float>(a.z / c));
-      if (with_color) {
-        const std::uint64_t h = a.count / 2;
-        out.colors[v] = Rgb8{static_cast<std::uint8_t>((a.r + h) / a.count), static_cast<std::uint8_t>((a.g + h) / a.count),
-                             static_cast<std::uint8_t>((a.b + h) / a.count)};
+  detail::for_blocks(ncells, kChunk, [&](std::size_t c, std::size_t begin, std::size_t end) {
+    std::size_t v = ws.chunk_kept[c];
+    for_voxels(begin, end, [&](std::size_t first, std::size_t last) {
+      double x = 0, y = 0, z = 0;
+      std::uint64_t r = 0, g = 0, b = 0, cnt = 0;
+      for (std::size_t j = first; j < last; ++j) {
+        if (j + 16 < ncells) __builtin_prefetch(ptrs[order[j + 16]]);  // the cells are scattered
+        const Sums& s = *ptrs[order[j]];
+        x += s.sx;
+        y += s.sy;
+        z += s.sz;
+        r += s.r;
+        g += s.g;
+        b += s.b;
+        cnt += s.count;
       }
-    }
+      if (cnt < min_pts) return;
+      const double dn = static_cast<double>(cnt);
+      out.points[v] = Eigen::Vector3f(static_cast<float>(x / dn), static_cast<float>(y / dn), static_cast<float>(z / dn));
+      if (with_color) {
+        const std::uint64_t h = cnt / 2;
+        out.colors[v] = Rgb8{static_cast<std::uint8_t>((r + h) / cnt), static_cast<std::uint8_t>((g + h) / cnt),
+                             static_cast<std::uint8_t>((b + h) / cnt)};
+      }
+      ++v;
+    });
   });
 }
 

@@ -151,6 +151,71 @@ TEST(KdTree, KnnMatchesBruteForceOnRandomClouds) {
   }
 }
 
+TEST(KdTree, BoundedKnnIsTheKnnWithinTheBound) {
+  // knn_tree(q, k, max_dist2): the k nearest among the points with d2 <= max_dist2; with a bound
+  // that holds k points it equals the unbounded search (also on lattice ties at the bound).
+  const auto pts = lattice_cloud(3000, 41);
+  const KdTree tree(pts);
+  std::mt19937 rng(43);
+  std::uniform_int_distribution<int> c(-20, 20);
+  std::uint32_t pos[40];
+  float d2[40];
+  for (int qi = 0; qi < 120; ++qi) {
+    const Eigen::Vector3f q = Eigen::Vector3f(static_cast<float>(c(rng)), static_cast<float>(c(rng)), static_cast<float>(c(rng))) / 8.0f;
+    const auto all = brute_all(pts, q);
+    for (const int k : {1, 10, 33}) {
+      for (const float bound : {0.0f, all[5].d2, all[static_cast<std::size_t>(k) - 1].d2, all[40].d2, kInf}) {
+        std::vector<Hit> want;
+        for (const Hit& h : all)
+          if (h.d2 <= bound && want.size() < static_cast<std::size_t>(k)) want.push_back(h);
+        const int got = tree.knn_tree(q, k, bound, pos, d2);
+        ASSERT_EQ(got, static_cast<int>(want.size())) << "k " << k << " bound " << bound;
+        for (int j = 0; j < got; ++j) {
+          ASSERT_EQ(tree.order()[pos[j]], want[static_cast<std::size_t>(j)].i) << "rank " << j;
+          ASSERT_EQ(d2[j], want[static_cast<std::size_t>(j)].d2);
+        }
+      }
+    }
+  }
+  EXPECT_EQ(tree.knn_tree(Eigen::Vector3f::Zero(), 5, kNaN, pos, d2), 0);
+  EXPECT_EQ(tree.knn_tree(Eigen::Vector3f::Zero(), 5, -1.0f, pos, d2), 0);
+}
+
+TEST(KdTree, HintedKnnEqualsKnn) {
+  // knn_tree_near: the same result as knn_tree for any hint - the query's own position (its
+  // ancestor cell usually holds the answer), a far point (the search must go on to the rest of
+  // the tree), an invalid position (ignored); on lattice ties and split-plane duplicates too.
+  for (const int leaf : {1, 4, 32}) {
+    auto pts = lattice_cloud(5000, 60 + static_cast<std::uint32_t>(leaf));
+    const auto rnd = test::random_points(3000, 61, -1.0f, 1.0f);
+    pts.insert(pts.end(), rnd.begin(), rnd.end());
+    KdTreeSettings s;
+    s.max_leaf_size = leaf;
+    const KdTree tree(pts, s);
+    const auto tp = tree.tree_points();
+    std::mt19937 rng(62);
+    std::uniform_int_distribution<std::uint32_t> pick(0, static_cast<std::uint32_t>(tp.size() - 1));
+    std::uint32_t pos_a[33], pos_b[33];
+    float d_a[33], d_b[33];
+    for (int qi = 0; qi < 400; ++qi) {
+      const std::uint32_t j = pick(rng);
+      const Eigen::Vector3f q = qi % 2 == 0 ? tp[j] : tp[j] + Eigen::Vector3f(0.01f, -0.02f, 0.005f);
+      for (const int k : {1, 10, 33}) {
+        const int want = tree.knn_tree(q, k, pos_a, d_a);
+        for (const std::uint32_t hint : {j, pick(rng), 0xFFFFFFF0u}) {
+          for (const float bound : {kInf, d_a[want - 1]}) {
+            ASSERT_EQ(tree.knn_tree_near(q, k, bound, hint, pos_b, d_b), want) << "k " << k << " hint " << hint;
+            for (int r = 0; r < want; ++r) {
+              ASSERT_EQ(pos_b[r], pos_a[r]) << "rank " << r << " k " << k << " hint " << hint;
+              ASSERT_EQ(d_b[r], d_a[r]);
+            }
+          }
+        }
+      }
+    }
+  }
+}
+
 TEST(KdTree, RadiusMatchesBruteForce) {
   const auto pts = lattice_cloud(4000, 5);
   const KdTree tree(pts);

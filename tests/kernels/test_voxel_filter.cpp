@@ -12,6 +12,7 @@
 
 #include <array>
 #include <cstdio>
+#include <cstring>
 #include <map>
 #include <random>
 #include <vector>
@@ -276,6 +277,61 @@ TEST(VoxelFilter, StridedInputInsideA32ByteStruct) {
   const PointCloud got = filter(pv, cv, 0.05f);
   EXPECT_TRUE(test::bitwise_equal(got, filter(c.points_view(), c.colors_view(), 0.05f)));
   expect_matches_reference(got, reference_voxel(c.points_view(), c.colors_view(), 0.05f));
+}
+
+TEST(VoxelFilter, LongRunsAcrossChunkAndBlockBoundaries) {
+  // Organised-like input: long runs of consecutive points in one voxel (as neighbouring pixels
+  // give), runs that cross the 2048-point chunks and 32768-point blocks, voxels revisited
+  // after other voxels, single-point runs, and NaN points inside runs.
+  std::mt19937 rng(77);
+  std::uniform_real_distribution<float> jitter(0.0f, 0.049f);
+  std::uniform_int_distribution<int> run_len(1, 5000), cell(-3, 3);
+  std::vector<Eigen::Vector3f> p;
+  while (p.size() < 120000) {
+    const Eigen::Vector3f base(0.05f * static_cast<float>(cell(rng)), 0.05f * static_cast<float>(cell(rng)),
+                               0.05f * static_cast<float>(cell(rng)));
+    const int len = p.size() % 3 == 0 ? 1 : run_len(rng);
+    for (int i = 0; i < len; ++i) {
+      p.push_back(base + Eigen::Vector3f(jitter(rng), jitter(rng), jitter(rng)) * 0.5f + Eigen::Vector3f::Constant(0.001f));
+      if (i % 997 == 5) p.emplace_back(kNaN, 0.0f, 0.0f);
+    }
+  }
+  const std::vector<Rgb8> c = test::random_colors(p.size(), 78);
+  expect_matches_reference(filter(p, c, 0.05f), reference_voxel(p, c, 0.05f));
+}
+
+TEST(VoxelFilter, OverlappingAndZeroStrides) {
+  // Strides below 12 bytes (overlapping points) and 0 (one point repeated): the 16-byte vector
+  // loads must stay inside the view, and the result must match the reference.
+  std::vector<float> raw(4000);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (auto& v : raw) v = u(rng);
+  for (const std::size_t stride : {std::size_t{0}, std::size_t{4}, std::size_t{8}, std::size_t{12}}) {
+    const std::size_t n = stride == 0 ? 500 : (raw.size() * sizeof(float) - 12) / stride + 1;
+    // A copy of exactly the bytes the view covers, so reading past them would be caught by ASan.
+    const std::size_t bytes = (n - 1) * stride + 12;
+    std::vector<float> exact(bytes / sizeof(float));
+    std::memcpy(exact.data(), raw.data(), bytes);
+    const PointsView pv(exact.data(), n, stride);
+    expect_matches_reference(filter(pv, {}, 0.1f), reference_voxel(pv, {}, 0.1f));
+  }
+}
+
+TEST(VoxelFilter, IndexRangeLimitIsTwoToThe31) {
+  // |p / leaf| up to the largest float below 2^31 is a valid voxel index; 2^31 is not.
+  VoxelFilterSettings s;
+  s.leaf_size_m = 1.0f;
+  PointCloud out;
+  const std::vector<Eigen::Vector3f> ok{{2147483520.0f, 0, 0}, {-2147483520.0f, 1.5f, 0}};
+  voxel_filter(ok, {}, s, out);
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_EQ(out.points[0], ok[0]);  // (y, x) order: y = 0 first
+  EXPECT_EQ(out.points[1], ok[1]);
+  const std::vector<Eigen::Vector3f> bad{{0, 0, 0}, {0, 2147483648.0f, 0}};
+  EXPECT_DUET_ERROR(voxel_filter(bad, {}, s, out), ErrorCode::kOutOfRange, "axis y");
+  const std::vector<Eigen::Vector3f> bad_neg{{0, 0, -2147483648.0f}};
+  EXPECT_DUET_ERROR(voxel_filter(bad_neg, {}, s, out), ErrorCode::kOutOfRange, "axis z");
 }
 
 TEST(VoxelFilter, WorkspaceReuse) {

@@ -49,6 +49,19 @@ class KdTree {
   /// As knn(), but returns tree positions (indices into tree_points()) instead of input indices.
   int knn_tree(const Eigen::Vector3f& q, int k, std::uint32_t* tree_pos, float* dist2) const;
 
+  /// As knn_tree(), but only points with squared distance <= max_dist2 [m^2] are considered
+  /// (fewer than k are returned when fewer lie that close). A bound known to hold k points -
+  /// e.g. the farthest of the previous query's neighbours, for queries in tree order - gives
+  /// the same result as the unbounded search, with less work.
+  int knn_tree(const Eigen::Vector3f& q, int k, float max_dist2, std::uint32_t* tree_pos, float* dist2) const;
+
+  /// As knn_tree() with a bound, for a query near the indexed point at tree position hint_pos
+  /// (e.g. the query is that point, as for normals): the search starts in the hint's part of the
+  /// tree instead of at the root, and goes on to the rest only if the result could lie beyond
+  /// it. The same result as knn_tree(); a hint far from q only costs time.
+  int knn_tree_near(const Eigen::Vector3f& q, int k, float max_dist2, std::uint32_t hint_pos,
+                    std::uint32_t* tree_pos, float* dist2) const;
+
  private:
   struct Node {
     // Leaf: begin/end into pts_. Inner: split dimension and value, children indices.
@@ -58,9 +71,20 @@ class KdTree {
     std::uint32_t b = 0;    // leaf: end,   inner: right child
   };
   struct Item;
+  struct LeafStart {
+    std::uint32_t node;        // ancestor of the leaf where hinted searches start
+    Eigen::Vector3f lo, hi;    // its cell
+  };
+  static constexpr std::uint32_t kNoHint = 0xFFFFFFFFu;
+  int knn_impl(const Eigen::Vector3f& q, int k, float max_dist2, std::uint32_t hint, std::uint32_t* tree_pos,
+               float* dist2) const;
+  void index_leaf_starts(std::uint32_t m);
+  std::vector<LeafStart> leaf_start_;
+  std::vector<std::uint32_t> leaf_of_;  // tree position -> leaf (index into leaf_start_)
 
   std::vector<Eigen::Vector3f> pts_;  // tree order
-  std::vector<float> xs_, ys_, zs_;   // the same, as structure of arrays (vectorised leaf scans)
+  static constexpr std::size_t kPad = 8;
+  std::vector<float> xs_, ys_, zs_;   // the same, as structure of arrays (vectorised leaf scans), + kPad
   std::vector<std::uint32_t> ids_;    // tree order -> input index
   std::vector<Node> nodes_;
   std::size_t n_input_ = 0;
