@@ -24,6 +24,11 @@ struct KdTree::Item {
 
 namespace {
 
+// Cells are pruned only when their distance exceeds the k-th distance by this factor: the
+// incrementally computed cell distance may round up by a few ulps, and a point exactly at the
+// k-th distance (a tie, or a point at max_dist2) must still be found.
+constexpr float kPruneSlack = 1.00001f;
+
 // Sorted fixed-capacity list of the best k candidates. Each candidate is one 64-bit key:
 // the bits of its squared distance (a non-negative float: its bits sort as the value) above
 // its input index, so "nearer, then smaller index" is a single integer comparison.
@@ -77,48 +82,82 @@ void KdTree::build(PointsView points, const KdTreeSettings& settings) {
   }
   const auto m = static_cast<std::uint32_t>(items.size());
   nodes_.clear();
-  // Median splits give leaves of at least ceil(leaf/2) points (unless the input is smaller):
-  // at most 2m/ceil(leaf/2) + 1 nodes.
-  const std::size_t half = static_cast<std::size_t>((leaf_size_ + 1) / 2);
-  nodes_.resize(2 * (static_cast<std::size_t>(m) / half) + 3);
+  // Splits leave at least a quarter of a node's points on each side, so leaves hold at least
+  // ceil(leaf/4) points (unless the input is smaller): at most 2m/ceil(leaf/4) + 1 nodes.
+  const std::size_t quarter = static_cast<std::size_t>((leaf_size_ + 3) / 4);
+  nodes_.resize(2 * (static_cast<std::size_t>(m) / quarter) + 3);
   std::atomic<std::uint32_t> next{0};
 
   // Recursive build; node numbers come from an atomic counter (their order may vary between
-  // runs, the tree's geometry and point order do not).
+  // runs, the tree's geometry and point order do not). Each node is split on the axis of its
+  // box's largest extent at the median of a fixed sample of its points, by one partition pass
+  // that also yields the two children's boxes (an exact median by nth_element only when the
+  // sample's is too lopsided: less than a quarter, or than ceil(leaf/4) points, on a side).
   struct Builder {
     KdTree& t;
     Item* items;
     std::atomic<std::uint32_t>& next;
-    std::uint32_t operator()(std::uint32_t begin, std::uint32_t end) const {
+    std::uint32_t min_leaf;  // ceil(leaf/4) >= 1: each side of a split gets at least this many
+    std::uint32_t operator()(std::uint32_t begin, std::uint32_t end, Eigen::Vector3f lo, Eigen::Vector3f hi) const {
       const std::uint32_t idx = next.fetch_add(1, std::memory_order_relaxed);
       Node& node = t.nodes_[idx];
       const std::uint32_t count = end - begin;
-      if (count > static_cast<std::uint32_t>(t.leaf_size_)) {
-        Eigen::Vector3f lo = items[begin].p, hi = lo;
-        for (std::uint32_t i = begin + 1; i < end; ++i) {
-          lo = lo.cwiseMin(items[i].p);
-          hi = hi.cwiseMax(items[i].p);
-        }
-        int dim;
-        const float extent = (hi - lo).maxCoeff(&dim);
-        if (extent > 0.0f) {
-          const std::uint32_t mid = begin + count / 2;
-          std::nth_element(items + begin, items + mid, items + end, [dim](const Item& a, const Item& b) {
-            return a.p[dim] < b.p[dim] || (a.p[dim] == b.p[dim] && a.id < b.id);
-          });
-          node.split = items[mid].p[dim];  // before the children reorder items[mid]
-          std::uint32_t l = 0, r = 0;
-          if (count > 16384) {
-            tbb::parallel_invoke([&] { l = (*this)(begin, mid); }, [&] { r = (*this)(mid, end); });
-          } else {
-            l = (*this)(begin, mid);
-            r = (*this)(mid, end);
+      int dim;
+      if (count > static_cast<std::uint32_t>(t.leaf_size_) && (hi - lo).maxCoeff(&dim) > 0.0f) {
+        constexpr std::uint32_t kSample = 31;
+        float sample[kSample];
+        const std::uint32_t ns = std::min(kSample, count);
+        for (std::uint32_t i = 0; i < ns; ++i) sample[i] = items[begin + static_cast<std::uint32_t>((std::uint64_t{count} * (2 * i + 1)) / (2 * ns))].p[dim];
+        std::nth_element(sample, sample + ns / 2, sample + ns);
+        float split = sample[ns / 2];
+        // Partition: p[dim] < split left, the rest right; the children's boxes on the way.
+        const float inf = std::numeric_limits<float>::infinity();
+        Eigen::Vector3f llo = Eigen::Vector3f::Constant(inf), lhi = -llo, rlo = llo, rhi = -llo;
+        std::uint32_t i = begin, j = end;
+        while (true) {
+          while (i < j && items[i].p[dim] < split) {
+            llo = llo.cwiseMin(items[i].p);
+            lhi = lhi.cwiseMax(items[i].p);
+            ++i;
           }
-          node.dim = dim;
-          node.a = l;
-          node.b = r;
-          return idx;
+          while (i < j && !(items[j - 1].p[dim] < split)) {
+            rlo = rlo.cwiseMin(items[j - 1].p);
+            rhi = rhi.cwiseMax(items[j - 1].p);
+            --j;
+          }
+          if (i >= j) break;
+          std::swap(items[i], items[j - 1]);
         }
+        std::uint32_t mid = i;
+        const std::uint32_t min_side = std::max(min_leaf, count / 4);
+        if (mid - begin < min_side || end - mid < min_side) {  // lopsided: exact median
+          mid = begin + count / 2;
+          std::nth_element(items + begin, items + mid, items + end,
+                           [dim](const Item& a, const Item& b) { return a.p[dim] < b.p[dim]; });
+          split = items[mid].p[dim];
+          llo = rlo = Eigen::Vector3f::Constant(inf);
+          lhi = rhi = -llo;
+          for (std::uint32_t k = begin; k < mid; ++k) {
+            llo = llo.cwiseMin(items[k].p);
+            lhi = lhi.cwiseMax(items[k].p);
+          }
+          for (std::uint32_t k = mid; k < end; ++k) {
+            rlo = rlo.cwiseMin(items[k].p);
+            rhi = rhi.cwiseMax(items[k].p);
+          }
+        }
+        node.split = split;
+        std::uint32_t l = 0, r = 0;
+        if (count > 16384) {
+          tbb::parallel_invoke([&] { l = (*this)(begin, mid, llo, lhi); }, [&] { r = (*this)(mid, end, rlo, rhi); });
+        } else {
+          l = (*this)(begin, mid, llo, lhi);
+          r = (*this)(mid, end, rlo, rhi);
+        }
+        node.dim = dim;
+        node.a = l;
+        node.b = r;
+        return idx;
       }
       node.dim = -1;
       node.a = begin;
@@ -126,7 +165,14 @@ void KdTree::build(PointsView points, const KdTreeSettings& settings) {
       return idx;
     }
   };
-  if (m > 0) Builder{*this, items.data(), next}(0, m);
+  if (m > 0) {
+    Eigen::Vector3f lo = items[0].p, hi = lo;
+    for (const Item& it : items) {
+      lo = lo.cwiseMin(it.p);
+      hi = hi.cwiseMax(it.p);
+    }
+    Builder{*this, items.data(), next, static_cast<std::uint32_t>(quarter)}(0, m, lo, hi);
+  }
   nodes_.resize(next.load());
   node_count_ = next.load();
   index_leaf_starts(m);
@@ -183,7 +229,7 @@ int KdTree::knn_impl(const Eigen::Vector3f& q, int k, float max_dist2, std::uint
   stack[top++] = {start, start_off[0] + start_off[1] + start_off[2], {start_off[0], start_off[1], start_off[2]}};
   while (top > 0) {
     const Frame f = stack[--top];
-    if (f.mindist > best.worst() || f.node == skip) continue;
+    if (f.mindist > best.worst() * kPruneSlack || f.node == skip) continue;
     std::uint32_t ni = f.node;
     float mindist = f.mindist;
     float off[3] = {f.off[0], f.off[1], f.off[2]};
@@ -228,7 +274,7 @@ int KdTree::knn_impl(const Eigen::Vector3f& q, int k, float max_dist2, std::uint
       const std::uint32_t far = diff < 0.0f ? nd.b : nd.a;
       const float d2 = diff * diff;
       const float far_min = mindist - off[nd.dim] + d2;
-      if (far_min <= best.worst() && top < 128) {
+      if (far_min <= best.worst() * kPruneSlack && top < 128) {
         Frame g{far, far_min, {off[0], off[1], off[2]}};
         g.off[nd.dim] = d2;
         stack[top++] = g;
@@ -335,7 +381,7 @@ std::size_t KdTree::radius(const Eigen::Vector3f& q, float radius, std::vector<s
     const std::uint32_t far = diff < 0.0f ? nd.b : nd.a;
     const float d2 = diff * diff;
     const float far_min = f.mindist - f.off[nd.dim] + d2;
-    if (far_min <= r2) {
+    if (far_min <= r2 * kPruneSlack) {
       Frame g = f;
       g.node = far;
       g.mindist = far_min;
