@@ -226,63 +226,63 @@ int KdTree::knn_impl(const Eigen::Vector3f& q, int k, float max_dist2, std::uint
   // Searches the subtree of start (q's squared distance components to its cell in off), never
   // entering the subtree of skip.
   auto search = [&](std::uint32_t start, const float (&start_off)[3], std::uint32_t skip) {
-  stack[top++] = {start, start_off[0] + start_off[1] + start_off[2], {start_off[0], start_off[1], start_off[2]}};
-  while (top > 0) {
-    const Frame f = stack[--top];
-    if (f.mindist > best.worst() * kPruneSlack || f.node == skip) continue;
-    std::uint32_t ni = f.node;
-    float mindist = f.mindist;
-    float off[3] = {f.off[0], f.off[1], f.off[2]};
-    while (true) {
-      const Node& nd = nodes_[ni];
-      if (nd.dim < 0) {
-        // Eight distances at a time, then the few candidates within the current k-th distance
-        // offered (one mostly-not-taken branch per eight points). The SoA arrays are padded by
-        // kPad entries, so the loads past the leaf's end stay inside them; those lanes are masked.
+    stack[top++] = {start, start_off[0] + start_off[1] + start_off[2], {start_off[0], start_off[1], start_off[2]}};
+    while (top > 0) {
+      const Frame f = stack[--top];
+      if (f.mindist > best.worst() * kPruneSlack || f.node == skip) continue;
+      std::uint32_t ni = f.node;
+      float mindist = f.mindist;
+      float off[3] = {f.off[0], f.off[1], f.off[2]};
+      while (true) {
+        const Node& nd = nodes_[ni];
+        if (nd.dim < 0) {
+          // Eight distances at a time, then the few candidates within the current k-th distance
+          // offered (one mostly-not-taken branch per eight points). The SoA arrays are padded by
+          // kPad entries, so the loads past the leaf's end stay inside them; those lanes are masked.
 #if defined(__SSE2__)
-        const __m128 qx = _mm_set1_ps(q.x()), qy = _mm_set1_ps(q.y()), qz = _mm_set1_ps(q.z());
-        for (std::uint32_t j0 = nd.a; j0 < nd.b; j0 += 8) {
-          alignas(16) float d[8];
-          for (int h = 0; h < 2; ++h) {
-            const __m128 dx = _mm_sub_ps(_mm_loadu_ps(xs_.data() + j0 + 4 * h), qx);
-            const __m128 dy = _mm_sub_ps(_mm_loadu_ps(ys_.data() + j0 + 4 * h), qy);
-            const __m128 dz = _mm_sub_ps(_mm_loadu_ps(zs_.data() + j0 + 4 * h), qz);
-            // dx^2 + (dy^2 + dz^2): the order of Eigen's squaredNorm, identical values
-            _mm_store_ps(d + 4 * h, _mm_add_ps(_mm_mul_ps(dx, dx), _mm_add_ps(_mm_mul_ps(dy, dy), _mm_mul_ps(dz, dz))));
+          const __m128 qx = _mm_set1_ps(q.x()), qy = _mm_set1_ps(q.y()), qz = _mm_set1_ps(q.z());
+          for (std::uint32_t j0 = nd.a; j0 < nd.b; j0 += 8) {
+            alignas(16) float d[8];
+            for (int h = 0; h < 2; ++h) {
+              const __m128 dx = _mm_sub_ps(_mm_loadu_ps(xs_.data() + j0 + 4 * h), qx);
+              const __m128 dy = _mm_sub_ps(_mm_loadu_ps(ys_.data() + j0 + 4 * h), qy);
+              const __m128 dz = _mm_sub_ps(_mm_loadu_ps(zs_.data() + j0 + 4 * h), qz);
+              // dx^2 + (dy^2 + dz^2): the order of Eigen's squaredNorm, identical values
+              _mm_store_ps(d + 4 * h, _mm_add_ps(_mm_mul_ps(dx, dx), _mm_add_ps(_mm_mul_ps(dy, dy), _mm_mul_ps(dz, dz))));
+            }
+            const __m128 w = _mm_set1_ps(best.worst());
+            unsigned mask = static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(_mm_load_ps(d), w))) |
+                            static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(_mm_load_ps(d + 4), w))) << 4;
+            if (nd.b - j0 < 8) mask &= (1u << (nd.b - j0)) - 1u;
+            while (mask != 0) {
+              const std::uint32_t t = static_cast<std::uint32_t>(std::countr_zero(mask));
+              mask &= mask - 1;
+              if (d[t] <= best.worst()) best.offer(d[t], j0 + t);
+            }
           }
-          const __m128 w = _mm_set1_ps(best.worst());
-          unsigned mask = static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(_mm_load_ps(d), w))) |
-                          static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(_mm_load_ps(d + 4), w))) << 4;
-          if (nd.b - j0 < 8) mask &= (1u << (nd.b - j0)) - 1u;
-          while (mask != 0) {
-            const std::uint32_t t = static_cast<std::uint32_t>(std::countr_zero(mask));
-            mask &= mask - 1;
-            if (d[t] <= best.worst()) best.offer(d[t], j0 + t);
-          }
-        }
 #else
-        for (std::uint32_t j = nd.a; j < nd.b; ++j) {
-          const float dx = xs_[j] - q.x(), dy = ys_[j] - q.y(), dz = zs_[j] - q.z();
-          const float d = dx * dx + (dy * dy + dz * dz);
-          if (d <= best.worst()) best.offer(d, j);
-        }
+          for (std::uint32_t j = nd.a; j < nd.b; ++j) {
+            const float dx = xs_[j] - q.x(), dy = ys_[j] - q.y(), dz = zs_[j] - q.z();
+            const float d = dx * dx + (dy * dy + dz * dz);
+            if (d <= best.worst()) best.offer(d, j);
+          }
 #endif
-        break;
+          break;
+        }
+        const float diff = q[nd.dim] - nd.split;
+        const std::uint32_t near = diff < 0.0f ? nd.a : nd.b;
+        const std::uint32_t far = diff < 0.0f ? nd.b : nd.a;
+        const float d2 = diff * diff;
+        const float far_min = mindist - off[nd.dim] + d2;
+        if (far_min <= best.worst() * kPruneSlack && top < 128) {
+          Frame g{far, far_min, {off[0], off[1], off[2]}};
+          g.off[nd.dim] = d2;
+          stack[top++] = g;
+        }
+        if (near == skip) break;
+        ni = near;
       }
-      const float diff = q[nd.dim] - nd.split;
-      const std::uint32_t near = diff < 0.0f ? nd.a : nd.b;
-      const std::uint32_t far = diff < 0.0f ? nd.b : nd.a;
-      const float d2 = diff * diff;
-      const float far_min = mindist - off[nd.dim] + d2;
-      if (far_min <= best.worst() * kPruneSlack && top < 128) {
-        Frame g{far, far_min, {off[0], off[1], off[2]}};
-        g.off[nd.dim] = d2;
-        stack[top++] = g;
-      }
-      if (near == skip) break;
-      ni = near;
     }
-  }
   };
   constexpr float kZero[3] = {0.0f, 0.0f, 0.0f};
   if (hint == kNoHint) {
@@ -322,10 +322,10 @@ void KdTree::index_leaf_starts(std::uint32_t m) {
     Eigen::Vector3f lo, hi;
   };
   std::vector<Visit> path;  // current root-to-node path (explicit DFS keeps cells)
-  std::vector<Visit> todo{{0, 0, Eigen::Vector3f::Constant(-kInf), Eigen::Vector3f::Constant(kInf)}};
-  while (!todo.empty()) {
-    const Visit it = todo.back();
-    todo.pop_back();
+  std::vector<Visit> pending{{0, 0, Eigen::Vector3f::Constant(-kInf), Eigen::Vector3f::Constant(kInf)}};
+  while (!pending.empty()) {
+    const Visit it = pending.back();
+    pending.pop_back();
     while (!path.empty() && path.back().depth >= it.depth) path.pop_back();
     path.push_back(it);
     const Node& nd = nodes_[it.node];
@@ -342,8 +342,8 @@ void KdTree::index_leaf_starts(std::uint32_t m) {
     l.depth = r.depth = it.depth + 1;
     l.hi[nd.dim] = nd.split;
     r.lo[nd.dim] = nd.split;
-    todo.push_back(r);
-    todo.push_back(l);
+    pending.push_back(r);
+    pending.push_back(l);
   }
 }
 

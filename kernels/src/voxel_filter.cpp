@@ -29,10 +29,6 @@ void validate(const VoxelFilterSettings& s) {
 
 namespace {
 
-struct Cell {
-  std::int32_t x = 0, y = 0, z = 0;
-  friend bool operator==(const Cell&, const Cell&) = default;
-};
 constexpr std::size_t kBlock = 1 << 15;
 constexpr std::int32_t kBadIndex = std::numeric_limits<std::int32_t>::min();  // cvttss2si's "invalid"
 
@@ -77,57 +73,38 @@ void table_resize(Table& t, std::size_t cap) {
   }
 }
 
-// Sums of one run of consecutive points in the same voxel (neighbouring pixels), added to the
-// block's table once per run. Point sums in double, in input order.
-struct Run {
-  Cell cell{};
-  bool open = false;
-  std::uint64_t hash = 0;
-  double sx = 0, sy = 0, sz = 0;
-  std::uint32_t sr = 0, sg = 0, sb = 0, count = 0;
-};
-
-// A finished run goes into the block's hash table (open addressing, linear probing, load <= 1/2).
-// Callers prefetch the slot (run.hash) early: runs average ~4 points on Kinect frames, so the
-// table's L2 latency would otherwise be paid every few points.
-inline void flush(Table& t, Run& run) {
-  if (!run.open) return;
-  std::uint64_t h = run.hash;
+// Adds the sums of one run of consecutive points in one voxel (Sums or VoxelRunRecord: cell
+// x, y, z and sums sx, sy, sz, r, g, b, count) to the block's hash table (open addressing,
+// linear probing, load <= 1/2); h = cell_hash() of its cell. Callers prefetch slot h early:
+// runs average ~4 points on Kinect frames, so the table's L2 latency would otherwise be paid
+// every few points.
+template <class RunSums>
+inline void table_add(Table& t, const RunSums& run, std::uint64_t h) {
   while (true) {
     Sums& s = t.slots[h].s;
     if (s.count == 0) {
       if (2 * (t.used.size() + 1) > t.slots.size()) [[unlikely]] {
         table_grow(t);
-        run.hash = cell_hash(run.cell.x, run.cell.y, run.cell.z, t.shift);
-        flush(t, run);
+        table_add(t, run, cell_hash(run.x, run.y, run.z, t.shift));
         return;
       }
-      s.x = run.cell.x;
-      s.y = run.cell.y;
-      s.z = run.cell.z;
+      s.x = run.x;
+      s.y = run.y;
+      s.z = run.z;
       t.used.push_back(static_cast<std::uint32_t>(h));
       break;
     }
-    if (s.x == run.cell.x && s.y == run.cell.y && s.z == run.cell.z) break;
+    if (s.x == run.x && s.y == run.y && s.z == run.z) break;
     h = (h + 1) & t.mask;
   }
   Sums& s = t.slots[h].s;
   s.sx += run.sx;
   s.sy += run.sy;
   s.sz += run.sz;
-  s.r += run.sr;
-  s.g += run.sg;
-  s.b += run.sb;
+  s.r += run.r;
+  s.g += run.g;
+  s.b += run.b;
   s.count += run.count;
-  run = Run{};
-}
-
-// Starts a run in cell c and prefetches the cell's table slot.
-inline void begin_run(const Table& t, Run& run, const Cell& c) {
-  run.cell = c;
-  run.open = true;
-  run.hash = cell_hash(c.x, c.y, c.z, t.shift);
-  __builtin_prefetch(&t.slots[run.hash], 1);
 }
 
 // A point whose cell has a kBadIndex coordinate: skipped if not finite (as PCL), otherwise its
@@ -221,18 +198,7 @@ std::size_t vector_points(PointsView points, ColorsView colors, float inv, std::
         __builtin_prefetch(&table.slots[cell_hash(f.x, f.y, f.z, table.shift)], 1);
       }
       const RunRecord& q = rec[r];
-      Run run;
-      run.cell = Cell{q.x, q.y, q.z};
-      run.open = true;
-      run.hash = cell_hash(q.x, q.y, q.z, table.shift);
-      run.sx = q.sx;
-      run.sy = q.sy;
-      run.sz = q.sz;
-      run.sr = q.r;
-      run.sg = q.g;
-      run.sb = q.b;
-      run.count = q.count;
-      flush(table, run);
+      table_add(table, q, cell_hash(q.x, q.y, q.z, table.shift));
     }
   }
   return end;
@@ -244,14 +210,13 @@ std::size_t vector_points(PointsView points, ColorsView colors, float inv, std::
 void accumulate_block(PointsView points, ColorsView colors, float inv, std::size_t begin, std::size_t end,
                       Table& table, Block& m) {
   const bool with_color = !colors.empty();
-  Run run;
-  auto add_color = [&](std::size_t i) {
-    if (with_color) {
-      const std::uint8_t* c = colors.ptr(i);
-      run.sr += c[0];
-      run.sg += c[1];
-      run.sb += c[2];
-    }
+  // The scalar path (points the vector path cannot load, or no SSE2): runs summed in `run`
+  // (count 0 = no open run).
+  Sums run;
+  auto flush = [&] {
+    if (run.count == 0) return;
+    table_add(table, run, cell_hash(run.x, run.y, run.z, table.shift));
+    run = Sums{};
   };
   auto scalar_point = [&](std::size_t i) {
     const float* p = points.ptr(i);
@@ -260,16 +225,22 @@ void accumulate_block(PointsView points, ColorsView colors, float inv, std::size
       reject(m, p, idx);
       return;
     }
-    const Cell c{idx[0], idx[1], idx[2]};
-    if (!run.open || !(c == run.cell)) {
-      flush(table, run);
-      begin_run(table, run, c);
+    if (run.count == 0 || run.x != idx[0] || run.y != idx[1] || run.z != idx[2]) {
+      flush();
+      run.x = idx[0];
+      run.y = idx[1];
+      run.z = idx[2];
     }
     run.sx += static_cast<double>(p[0]);
     run.sy += static_cast<double>(p[1]);
     run.sz += static_cast<double>(p[2]);
     ++run.count;
-    add_color(i);
+    if (with_color) {
+      const std::uint8_t* c = colors.ptr(i);
+      run.r += c[0];
+      run.g += c[1];
+      run.b += c[2];
+    }
   };
   std::size_t i = begin;
 #if defined(__SSE2__)
@@ -286,7 +257,7 @@ void accumulate_block(PointsView points, ColorsView colors, float inv, std::size
   }
 #endif
   for (; i < end; ++i) scalar_point(i);
-  flush(table, run);
+  flush();
   // Hand the block's cells over in first-seen order and leave the table empty for the next block.
   m.cells.resize(table.used.size());
   std::int32_t lo[3] = {INT32_MAX, INT32_MAX, INT32_MAX}, hi[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
