@@ -77,6 +77,12 @@ void register_normals();
 void register_clustering();
 void register_grid_update();
 void register_memory();
+// Exploration kernels (issue 3): one file each, bench_<area>.cpp.
+void register_observation();
+void register_partial_sim();
+void register_frontier();
+void register_path();
+void register_dwa();
 
 /// Runs `body` in the arena of `threads` threads and reports a duet::Error (or any
 /// std::exception) as a skipped benchmark instead of aborting the whole run.

@@ -24,6 +24,11 @@ int main(int argc, char** argv) {
   duet::bench::register_normals();
   duet::bench::register_clustering();
   duet::bench::register_grid_update();
+  duet::bench::register_observation();
+  duet::bench::register_partial_sim();
+  duet::bench::register_frontier();
+  duet::bench::register_path();
+  duet::bench::register_dwa();
 #ifdef DUET_HAVE_PCL
   benchmark::AddCustomContext("duet_pcl", "PCL peers enabled");
 #else
