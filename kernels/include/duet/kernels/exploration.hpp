@@ -1,0 +1,66 @@
+#pragma once
+/// @file exploration.hpp
+/// The combined exploration strategy of the paper (§3.2, Fig. 6): the partial map simulation
+/// (Procedure 1, partial_sim.hpp) proposes a goal X_g with reward R_g; if R_g > eps_R that goal is
+/// taken, otherwise the global frontier search (frontier.hpp) gives the nearest reachable frontier;
+/// otherwise the decision says why nothing is left.
+///
+/// Thread safety: decide_goal() reads the model, the inflated grid and the blacklist (nobody may
+/// write them meanwhile) and needs exclusive use of its workspace.
+#include <duet/kernels/frontier.hpp>
+#include <duet/kernels/inflation.hpp>
+#include <duet/kernels/observation.hpp>
+#include <duet/kernels/partial_sim.hpp>
+
+#include <span>
+
+namespace duet {
+
+struct ExplorationSettings {
+  PartialSimSettings simulation;
+  FrontierSettings frontier;
+  /// eps_R of Fig. 6 [bits]: the simulated goal is taken only if its expected entropy reduction
+  /// exceeds this. One first observation of an unknown cell removes 0.03 bits (miss, l = -0.4)
+  /// to 0.12 bits (hit, l = 0.85), so 1 bit is about 30 newly seen cells (0.075 m^2 at 0.05 m):
+  /// less than that is not worth the trip and the frontier search takes over. [0, inf)
+  float eps_r_bits = 1.0f;
+  /// false: frontier search only (the explore_lite-like baseline the benchmarks compare against).
+  bool use_simulation = true;
+};
+void validate(const ExplorationSettings& s);
+
+enum class ExplorationStatus {
+  kSimulatedGoal,    ///< R_g > eps_R: the goal of the partial map simulation
+  kFrontierGoal,     ///< the nearest reachable, non-blacklisted frontier
+  kNoFrontier,       ///< nothing left: no frontier cell in the grid (exploration complete)
+  kAllUnreachable,   ///< frontiers exist but none can be reached from the robot
+  kAllBlacklisted,   ///< every reachable frontier is blacklisted (failed before) or too near
+  kRobotBlocked,     ///< no traversable cell near the robot (it sits in an inflated obstacle)
+};
+[[nodiscard]] const char* to_string(ExplorationStatus s);
+
+struct ExplorationDecision {
+  ExplorationStatus status = ExplorationStatus::kNoFrontier;
+  Pose2 goal;                 ///< valid for kSimulatedGoal and kFrontierGoal
+  float reward_bits = 0.0f;   ///< R_g of the simulation (also reported when the frontier goal was taken)
+  bool simulated_goal_blacklisted = false;  ///< R_g > eps_R but X_g lies in a blacklisted area
+  PartialSimResult simulation;  ///< empty when use_simulation is false
+  FrontierResult frontier;      ///< filled when the frontier search ran
+  [[nodiscard]] bool has_goal() const noexcept {
+    return status == ExplorationStatus::kSimulatedGoal || status == ExplorationStatus::kFrontierGoal;
+  }
+};
+
+struct ExplorationWorkspace {
+  PartialSimWorkspace simulation;
+  FrontierWorkspace frontier;
+};
+
+/// One decision (Fig. 6). `model` and `inflated` describe the same grid; `now_s` is the caller's
+/// clock for the blacklist's expiry. A frontier goal's heading points along the last segment of
+/// the path to it (towards the unknown side).
+ExplorationDecision decide_goal(const ObservationModel& model, const InflatedGrid& inflated, const Pose2& robot,
+                                std::span<const SensorSector> sensors, const GoalBlacklist& blacklist,
+                                double now_s, const ExplorationSettings& settings, ExplorationWorkspace& workspace);
+
+}  // namespace duet

@@ -1,0 +1,73 @@
+// The combined strategy of Fig. 6 (see exploration.hpp).
+#include <duet/kernels/error.hpp>
+#include <duet/kernels/exploration.hpp>
+
+#include <cmath>
+#include <string>
+
+namespace duet {
+
+void validate(const ExplorationSettings& s) {
+  validate(s.simulation);
+  validate(s.frontier);
+  if (!std::isfinite(s.eps_r_bits) || s.eps_r_bits < 0.0f)
+    fail(ErrorCode::kInvalidArgument,
+         "ExplorationSettings.eps_r_bits = " + std::to_string(s.eps_r_bits) + " is outside [0, inf)");
+}
+
+const char* to_string(ExplorationStatus s) {
+  switch (s) {
+    case ExplorationStatus::kSimulatedGoal: return "simulated_goal";
+    case ExplorationStatus::kFrontierGoal: return "frontier_goal";
+    case ExplorationStatus::kNoFrontier: return "no_frontier";
+    case ExplorationStatus::kAllUnreachable: return "all_frontiers_unreachable";
+    case ExplorationStatus::kAllBlacklisted: return "all_frontiers_blacklisted";
+    case ExplorationStatus::kRobotBlocked: return "robot_blocked";
+  }
+  return "unknown";
+}
+
+ExplorationDecision decide_goal(const ObservationModel& model, const InflatedGrid& inflated, const Pose2& robot,
+                                std::span<const SensorSector> sensors, const GoalBlacklist& blacklist,
+                                double now_s, const ExplorationSettings& s, ExplorationWorkspace& ws) {
+  validate(s);
+  ExplorationDecision d;
+  d.goal = robot;
+  if (s.use_simulation) {
+    d.simulation = partial_map_simulation(model, inflated, robot, sensors, s.simulation, ws.simulation);
+    d.reward_bits = d.simulation.reward_bits;
+    if (d.simulation.found && d.simulation.reward_bits > s.eps_r_bits) {  // Fig. 6: R_g > eps_R
+      const Eigen::Vector2f g(d.simulation.goal.x, d.simulation.goal.y);
+      if (!blacklist.blocks(g, s.frontier.blacklist_radius_m, now_s)) {
+        d.status = ExplorationStatus::kSimulatedGoal;
+        d.goal = d.simulation.goal;
+        return d;
+      }
+      d.simulated_goal_blacklisted = true;
+    }
+  }
+  // Otherwise the global frontier search (§3.2).
+  d.frontier = find_frontier(inflated, Eigen::Vector2f(robot.x, robot.y), blacklist, now_s, s.frontier, ws.frontier);
+  switch (d.frontier.status) {
+    case FrontierStatus::kFound: {
+      d.status = ExplorationStatus::kFrontierGoal;
+      d.goal.x = d.frontier.goal_xy.x();
+      d.goal.y = d.frontier.goal_xy.y();
+      const auto& path = d.frontier.path;
+      if (path.size() >= 2) {
+        const Eigen::Vector2f dir = path.back() - path[path.size() - 2];
+        d.goal.theta = std::atan2(dir.y(), dir.x());
+      } else {
+        d.goal.theta = std::atan2(d.goal.y - robot.y, d.goal.x - robot.x);
+      }
+      break;
+    }
+    case FrontierStatus::kNoFrontier: d.status = ExplorationStatus::kNoFrontier; break;
+    case FrontierStatus::kAllUnreachable: d.status = ExplorationStatus::kAllUnreachable; break;
+    case FrontierStatus::kAllBlacklisted: d.status = ExplorationStatus::kAllBlacklisted; break;
+    case FrontierStatus::kRobotBlocked: d.status = ExplorationStatus::kRobotBlocked; break;
+  }
+  return d;
+}
+
+}  // namespace duet

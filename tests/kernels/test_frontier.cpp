@@ -1,0 +1,616 @@
+// Frontier search (paper §3.2): frontier_mask vs a per-cell reference (both overloads); clusters vs
+// a reference flood fill; find_frontier vs a reference Dijkstra (heap of doubles) over the
+// traversable cells: same goal path length, goal is a valid candidate, path valid, per-cluster
+// reachability and distance; statuses on hand-made grids (closed room -> kNoFrontier, frontier only
+// behind a wall -> kAllUnreachable, blacklist -> kAllBlacklisted, expiry, robot blocked, border
+// frontiers not connected, small clusters ignored, min goal distance); GoalBlacklist; invalid
+// settings; thread counts; the Willow Garage map with a path to the goal (plan_path).
+#include "kernel_test_util.hpp"
+
+#include <duet/kernels/error.hpp>
+#include <duet/kernels/frontier.hpp>
+#include <duet/kernels/inflation.hpp>
+#include <duet/kernels/path.hpp>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <queue>
+#include <random>
+#include <vector>
+
+namespace duet {
+namespace {
+
+using test::kNaN;
+
+constexpr float kFree = -2.0f, kOcc = 3.0f, kMid = 0.1f;
+
+struct TestGrid {
+  std::vector<float> l;
+  int w = 0, h = 0;
+  float res = 0.05f;
+  Eigen::Vector2f origin{0.0f, 0.0f};
+  [[nodiscard]] GridView view() const { return GridView(l, w, h, res, origin); }
+  void set(int x, int y, float v) { l[static_cast<std::size_t>(y * w + x)] = v; }
+  void rect(int x0, int y0, int x1, int y1, float v) {  // inclusive
+    for (int y = std::max(0, y0); y <= std::min(h - 1, y1); ++y)
+      for (int x = std::max(0, x0); x <= std::min(w - 1, x1); ++x) set(x, y, v);
+  }
+};
+
+TestGrid blank(int w, int h, float v, float res = 0.05f) {
+  TestGrid g;
+  g.w = w;
+  g.h = h;
+  g.res = res;
+  g.origin = {-3.0f, 1.0f};
+  g.l.assign(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), v);
+  return g;
+}
+
+// Partly explored indoor-like grid: unknown everywhere, random free rectangles, wall segments and
+// clutter, unknown specks.
+TestGrid explored(int w, int h, std::uint32_t seed) {
+  TestGrid g = blank(w, h, kNaN);
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> ux(0, w - 1), uy(0, h - 1), us(4, std::max(5, w / 3));
+  for (int k = 0; k < 8; ++k) {
+    const int x = ux(rng), y = uy(rng);
+    g.rect(x, y, x + us(rng), y + us(rng), kFree);
+  }
+  for (int k = 0; k < (w * h) / 150; ++k) {
+    const int x = ux(rng), y = uy(rng), len = us(rng) / 2;
+    if (rng() & 1) g.rect(x, y, x + len, y, kOcc);
+    else g.rect(x, y, x, y + len, kOcc);
+  }
+  for (int k = 0; k < (w * h) / 80; ++k) g.set(ux(rng), uy(rng), (rng() % 3) ? kOcc : (rng() & 1 ? kNaN : kMid));
+  return g;
+}
+
+// ---- references ---------------------------------------------------------------------------------
+
+std::vector<std::uint8_t> reference_mask(const std::vector<CellState>& st, int w, int h) {
+  std::vector<std::uint8_t> m(st.size(), 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      if (st[static_cast<std::size_t>(y * w + x)] != CellState::kFree) continue;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int nx = x + dx, ny = y + dy;
+          if (nx >= 0 && ny >= 0 && nx < w && ny < h && st[static_cast<std::size_t>(ny * w + nx)] == CellState::kUnknown)
+            m[static_cast<std::size_t>(y * w + x)] = 1;
+        }
+    }
+  return m;
+}
+
+struct RefCluster {
+  std::vector<std::size_t> cells;
+};
+
+std::vector<RefCluster> reference_clusters(const std::vector<std::uint8_t>& m, int w, int h, int min_cells,
+                                           std::vector<int>& label) {
+  std::vector<RefCluster> out;
+  label.assign(m.size(), -1);
+  std::vector<char> seen(m.size(), 0);
+  for (std::size_t i = 0; i < m.size(); ++i) {
+    if (!m[i] || seen[i]) continue;
+    RefCluster c;
+    std::queue<std::size_t> q;
+    q.push(i);
+    seen[i] = 1;
+    while (!q.empty()) {
+      const std::size_t k = q.front();
+      q.pop();
+      c.cells.push_back(k);
+      const int x = int(k % std::size_t(w)), y = int(k / std::size_t(w));
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int nx = x + dx, ny = y + dy;
+          if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+          const std::size_t ni = std::size_t(ny * w + nx);
+          if (m[ni] && !seen[ni]) {
+            seen[ni] = 1;
+            q.push(ni);
+          }
+        }
+    }
+    if (static_cast<int>(c.cells.size()) >= min_cells) {
+      for (auto k : c.cells) label[k] = static_cast<int>(out.size());
+      out.push_back(std::move(c));
+    }
+  }
+  return out;
+}
+
+std::vector<double> reference_distances(const InflatedGrid& g, std::size_t start) {
+  std::vector<double> dist(g.cell_count(), std::numeric_limits<double>::infinity());
+  using Item = std::pair<double, std::size_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> pq;
+  dist[start] = 0.0;
+  pq.push({0.0, start});
+  while (!pq.empty()) {
+    const auto [d, c] = pq.top();
+    pq.pop();
+    if (d > dist[c]) continue;
+    const int x = int(c % std::size_t(g.width)), y = int(c / std::size_t(g.width));
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (dx == 0 && dy == 0) continue;
+        const int nx = x + dx, ny = y + dy;
+        if (!g.in_bounds(nx, ny) || !g.traversable[g.index(nx, ny)]) continue;
+        const bool diag = dx != 0 && dy != 0;
+        if (diag && (!g.traversable[g.index(nx, y)] || !g.traversable[g.index(x, ny)])) continue;
+        const double nd = d + (diag ? std::numbers::sqrt2 : 1.0) * g.resolution_m;
+        if (nd < dist[g.index(nx, ny)]) {
+          dist[g.index(nx, ny)] = nd;
+          pq.push({nd, g.index(nx, ny)});
+        }
+      }
+  }
+  return dist;
+}
+
+bool connected(const InflatedGrid& g, std::size_t c) {
+  const int x = int(c % std::size_t(g.width)), y = int(c / std::size_t(g.width));
+  return x > 0 && y > 0 && x < g.width - 1 && y < g.height - 1;
+}
+
+// Full comparison of find_frontier with the references; robot_xy must be in a traversable cell.
+void check_against_reference(const InflatedGrid& g, const Eigen::Vector2f& robot_xy, const GoalBlacklist& bl, double now,
+                             const FrontierSettings& s, const FrontierResult& r) {
+  const std::vector<std::uint8_t> m = reference_mask(g.state, g.width, g.height);
+  std::vector<int> label;
+  const std::vector<RefCluster> rc = reference_clusters(m, g.width, g.height, s.min_cluster_cells, label);
+  ASSERT_EQ(r.clusters.size(), rc.size());
+  std::size_t cells = 0;
+  for (std::size_t k = 0; k < rc.size(); ++k) {
+    ASSERT_EQ(r.clusters[k].cells, static_cast<std::int32_t>(rc[k].cells.size())) << "cluster " << k;
+    Eigen::Vector2d sum(0, 0);
+    for (auto c : rc[k].cells) sum += g.cell_center(c).cast<double>();
+    EXPECT_LT((r.clusters[k].centroid.cast<double>() - sum / double(rc[k].cells.size())).norm(), 1e-4);
+    cells += rc[k].cells.size();
+  }
+  EXPECT_EQ(r.frontier_cells, cells);
+  if (rc.empty()) {
+    EXPECT_EQ(r.status, FrontierStatus::kNoFrontier);
+    return;
+  }
+  const Eigen::Vector2i rcell = g.cell_of(robot_xy);
+  ASSERT_TRUE(g.traversable[g.index(rcell.x(), rcell.y())]) << "test setup: robot must be on a traversable cell";
+  const std::vector<double> dist = reference_distances(g, g.index(rcell.x(), rcell.y()));
+  double best = std::numeric_limits<double>::infinity();
+  bool any_connected = false;
+  for (std::size_t k = 0; k < rc.size(); ++k) {
+    double near = std::numeric_limits<double>::infinity();
+    bool cand_free = false, cand_blocked = false;
+    for (auto c : rc[k].cells) {
+      near = std::min(near, dist[c]);
+      if (!std::isfinite(dist[c]) || !connected(g, c)) continue;
+      any_connected = true;
+      if (dist[c] < s.min_goal_distance_m - 1e-3 * g.resolution_m) continue;
+      const bool blk = bl.blocks(g.cell_center(c), s.blacklist_radius_m, now);
+      (blk ? cand_blocked : cand_free) = true;
+      if (!blk) best = std::min(best, dist[c]);
+    }
+    EXPECT_EQ(r.clusters[k].reachable, std::isfinite(near)) << "cluster " << k;
+    if (std::isfinite(near)) {
+      EXPECT_NEAR(r.clusters[k].path_length_m, near, 1e-3) << "cluster " << k;
+      EXPECT_NEAR(dist[g.index(g.cell_of(r.clusters[k].nearest_xy).x(), g.cell_of(r.clusters[k].nearest_xy).y())], near, 1e-3);
+    } else {
+      EXPECT_TRUE(std::isinf(r.clusters[k].path_length_m));
+    }
+    EXPECT_EQ(r.clusters[k].blacklisted, cand_blocked && !cand_free) << "cluster " << k;
+  }
+  if (!std::isfinite(best)) {
+    EXPECT_EQ(r.status, any_connected ? FrontierStatus::kAllBlacklisted : FrontierStatus::kAllUnreachable);
+    EXPECT_TRUE(r.path.empty());
+    return;
+  }
+  ASSERT_EQ(r.status, FrontierStatus::kFound);
+  EXPECT_NEAR(r.path_length_m, best, 1e-3);
+  // The goal is a valid candidate at that distance.
+  const Eigen::Vector2i gc = g.cell_of(r.goal_xy);
+  const std::size_t gi = g.index(gc.x(), gc.y());
+  EXPECT_TRUE(m[gi]);
+  EXPECT_GE(label[gi], 0);
+  EXPECT_TRUE(connected(g, gi));
+  EXPECT_FALSE(bl.blocks(r.goal_xy, s.blacklist_radius_m, now));
+  EXPECT_NEAR(dist[gi], best, 1e-3);
+  // The path: robot cell -> goal over traversable cells, no corner cutting, length = path_length_m.
+  ASSERT_FALSE(r.path.empty());
+  EXPECT_EQ(g.cell_of(r.path.front()), rcell);
+  EXPECT_EQ(g.cell_of(r.path.back()), gc);
+  double len = 0.0;
+  for (std::size_t k = 0; k < r.path.size(); ++k) {
+    const Eigen::Vector2i c = g.cell_of(r.path[k]);
+    ASSERT_TRUE(g.traversable[g.index(c.x(), c.y())]);
+    if (k == 0) continue;
+    const Eigen::Vector2i p = g.cell_of(r.path[k - 1]);
+    const int dx = c.x() - p.x(), dy = c.y() - p.y();
+    ASSERT_TRUE(std::abs(dx) <= 1 && std::abs(dy) <= 1 && (dx || dy));
+    if (dx && dy) {
+      ASSERT_TRUE(g.traversable[g.index(c.x(), p.y())] && g.traversable[g.index(p.x(), c.y())]);
+    }
+    len += (dx && dy ? std::numbers::sqrt2 : 1.0) * g.resolution_m;
+  }
+  EXPECT_NEAR(len, r.path_length_m, 1e-3);
+}
+
+// ---- frontier_mask ---------------------------------------------------------------------------------
+
+TEST(Frontier, MaskMatchesReference) {
+  std::uint32_t seed = 1;
+  for (const auto& [w, h] : std::vector<std::pair<int, int>>{{1, 1}, {1, 9}, {9, 1}, {2, 2}, {33, 17}, {100, 70}, {257, 40}}) {
+    const TestGrid tg = explored(w, h, ++seed);
+    CellThresholds t;
+    std::vector<CellState> st(tg.l.size());
+    classify_grid(tg.view(), t, st);
+    const std::vector<std::uint8_t> ref = reference_mask(st, w, h);
+    std::vector<std::uint8_t> m(tg.l.size(), 7), m2(tg.l.size(), 9);
+    const std::size_t n = frontier_mask(tg.view(), t, m);
+    const std::size_t n2 = frontier_mask(st, w, h, m2);
+    EXPECT_EQ(m, ref) << w << "x" << h;
+    EXPECT_EQ(m2, ref) << w << "x" << h;
+    std::size_t cnt = 0;
+    for (auto v : ref) cnt += v;
+    EXPECT_EQ(n, cnt);
+    EXPECT_EQ(n2, cnt);
+  }
+  // Hand-made: a free cell next to an unknown one; the grid border is not unknown.
+  TestGrid tg = blank(4, 3, kFree);
+  tg.set(3, 2, kNaN);
+  std::vector<std::uint8_t> m(12);
+  EXPECT_EQ(frontier_mask(tg.view(), CellThresholds{}, m), 3u);
+  EXPECT_EQ(m, (std::vector<std::uint8_t>{0, 0, 0, 0, 0, 0, 1, 1, 0, 0, 1, 0}));
+  TestGrid empty;
+  std::vector<std::uint8_t> none;
+  EXPECT_EQ(frontier_mask(empty.view(), CellThresholds{}, none), 0u);
+  EXPECT_DUET_ERROR(frontier_mask(tg.view(), CellThresholds{}, none), ErrorCode::kInvalidArgument, "mask");
+}
+
+TEST(Frontier, MaskThreadCountIndependent) {
+  const TestGrid tg = explored(613, 411, 42);
+  std::vector<std::uint8_t> a(tg.l.size()), b(tg.l.size());
+  const std::size_t na = test::in_arena(1, [&] { return frontier_mask(tg.view(), CellThresholds{}, a); });
+  const std::size_t nb = test::in_arena(2, [&] { return frontier_mask(tg.view(), CellThresholds{}, b); });
+  EXPECT_EQ(na, nb);
+  EXPECT_EQ(a, b);
+  EXPECT_GT(na, 100u);
+}
+
+// ---- find_frontier vs reference ------------------------------------------------------------------------
+
+TEST(Frontier, MatchesReferenceOnRandomGrids) {
+  int found = 0, trials = 0;
+  for (std::uint32_t seed = 1; seed <= 24; ++seed) {
+    const int w = 40 + int(seed % 5) * 30, h = 30 + int(seed % 3) * 40;
+    const TestGrid tg = explored(w, h, seed * 31);
+    InflationSettings is;
+    is.robot_radius_m = seed % 2 ? 0.05f : 0.1f;
+    InflatedGrid g;
+    inflate(tg.view(), is, g);
+    std::vector<std::size_t> trav;
+    for (std::size_t i = 0; i < g.cell_count(); ++i)
+      if (g.traversable[i]) trav.push_back(i);
+    if (trav.empty()) continue;
+    std::mt19937 rng(seed);
+    std::uniform_int_distribution<std::size_t> pick(0, trav.size() - 1);
+    FrontierWorkspace ws;
+    for (int k = 0; k < 4; ++k) {
+      FrontierSettings s;
+      s.min_cluster_cells = 1 + k;
+      s.min_goal_distance_m = k == 2 ? 0.0f : 0.5f;
+      GoalBlacklist bl;
+      if (k == 3) bl.add(g.cell_center(trav[pick(rng)]), 0.0, 10.0);
+      const Eigen::Vector2f robot = g.cell_center(trav[pick(rng)]);
+      const FrontierResult r = find_frontier(g, robot, bl, 1.0, s, ws);
+      SCOPED_TRACE(::testing::Message() << "seed " << seed << " k " << k);
+      check_against_reference(g, robot, bl, 1.0, s, r);
+      ++trials;
+      found += r.status == FrontierStatus::kFound;
+    }
+  }
+  EXPECT_GT(found, trials / 3);
+}
+
+// ---- statuses on hand-made grids -------------------------------------------------------------------------
+
+// 60 x 40 cells of 0.05 m: known room [5, 30] x [5, 30] walled; unknown outside.
+TestGrid closed_room() {
+  TestGrid tg = blank(60, 40, kNaN);
+  tg.rect(4, 4, 31, 31, kOcc);
+  tg.rect(5, 5, 30, 30, kFree);
+  return tg;
+}
+
+TEST(Frontier, ClosedRoomHasNoFrontier) {
+  TestGrid tg = blank(40, 40, kFree);
+  tg.rect(0, 0, 39, 0, kOcc);
+  tg.rect(0, 39, 39, 39, kOcc);
+  tg.rect(0, 0, 0, 39, kOcc);
+  tg.rect(39, 0, 39, 39, kOcc);
+  InflatedGrid g;
+  inflate(tg.view(), InflationSettings{}, g);
+  FrontierWorkspace ws;
+  const FrontierResult r = find_frontier(g, g.cell_center(20, 20), GoalBlacklist{}, 0.0, FrontierSettings{}, ws);
+  EXPECT_EQ(r.status, FrontierStatus::kNoFrontier);
+  EXPECT_TRUE(r.clusters.empty());
+  // Also with unknown space outside the walls: the walls separate free from unknown.
+  const TestGrid room = closed_room();
+  inflate(room.view(), InflationSettings{}, g);
+  EXPECT_EQ(find_frontier(g, g.cell_center(15, 15), GoalBlacklist{}, 0.0, FrontierSettings{}, ws).status,
+            FrontierStatus::kNoFrontier);
+}
+
+TEST(Frontier, FrontierBehindWallIsUnreachable) {
+  TestGrid tg = closed_room();
+  tg.rect(40, 10, 50, 20, kFree);  // a known free patch beyond the wall, bordering unknown space
+  InflatedGrid g;
+  inflate(tg.view(), InflationSettings{}, g);
+  FrontierWorkspace ws;
+  const FrontierResult r = find_frontier(g, g.cell_center(15, 15), GoalBlacklist{}, 0.0, FrontierSettings{}, ws);
+  EXPECT_EQ(r.status, FrontierStatus::kAllUnreachable);
+  ASSERT_EQ(r.clusters.size(), 1u);
+  EXPECT_FALSE(r.clusters[0].reachable);
+  EXPECT_EQ(r.clusters[0].cells, 40);  // the ring of the 11 x 11 patch
+  EXPECT_TRUE(std::isinf(r.clusters[0].path_length_m));
+  EXPECT_EQ(g.cell_of(r.clusters[0].nearest_xy), Eigen::Vector2i(40, 15));
+}
+
+TEST(Frontier, DoorwayBlacklistExpiryAndMinDistance) {
+  TestGrid tg = closed_room();
+  tg.rect(31, 16, 31, 21, kFree);  // a 6-cell (0.3 m) door in the right wall: beyond it, unknown
+  InflationSettings is;
+  is.robot_radius_m = 0.05f;
+  InflatedGrid g;
+  inflate(tg.view(), is, g);
+  FrontierWorkspace ws;
+  FrontierSettings s;
+  const Eigen::Vector2f robot = g.cell_center(10, 18);
+  GoalBlacklist bl;
+  FrontierResult r = find_frontier(g, robot, bl, 0.0, s, ws);
+  ASSERT_EQ(r.status, FrontierStatus::kFound);
+  check_against_reference(g, robot, bl, 0.0, s, r);
+  EXPECT_EQ(g.cell_of(r.goal_xy).x(), 31);
+  EXPECT_NEAR(r.path_length_m, 21 * 0.05f, 1e-4f);
+  // Blacklist the door for 10 s (t = 100): every candidate is blocked.
+  bl.add(r.goal_xy, 100.0, 10.0);
+  r = find_frontier(g, robot, bl, 105.0, s, ws);
+  EXPECT_EQ(r.status, FrontierStatus::kAllBlacklisted);
+  ASSERT_EQ(r.clusters.size(), 1u);
+  EXPECT_TRUE(r.clusters[0].reachable);
+  EXPECT_TRUE(r.clusters[0].blacklisted);
+  check_against_reference(g, robot, bl, 105.0, s, r);
+  // Expired at t = 110 (blocks while now < expiry), even before expire() removes it.
+  EXPECT_EQ(find_frontier(g, robot, bl, 110.0, s, ws).status, FrontierStatus::kFound);
+  EXPECT_EQ(bl.size(), 1u);
+  bl.expire(110.0);
+  EXPECT_EQ(bl.size(), 0u);
+  // Too near: the robot stands 0.25 m from the door, min distance 0.5 m -> nothing to go to.
+  const Eigen::Vector2f near_door = g.cell_center(26, 18);
+  r = find_frontier(g, near_door, bl, 0.0, s, ws);
+  EXPECT_EQ(r.status, FrontierStatus::kAllBlacklisted);
+  FrontierSettings s0 = s;
+  s0.min_goal_distance_m = 0.0f;
+  r = find_frontier(g, near_door, bl, 0.0, s0, ws);
+  EXPECT_EQ(r.status, FrontierStatus::kFound);
+  EXPECT_NEAR(r.path_length_m, 5 * 0.05f, 1e-4f);
+  // min_cluster_cells larger than the door's frontier (6 cells): ignored -> no frontier.
+  FrontierSettings big = s;
+  big.min_cluster_cells = 7;
+  EXPECT_EQ(find_frontier(g, robot, bl, 0.0, big, ws).status, FrontierStatus::kNoFrontier);
+}
+
+TEST(Frontier, RobotBlockedAndBorderFrontiers) {
+  TestGrid tg = closed_room();
+  tg.rect(31, 16, 31, 21, kFree);
+  InflatedGrid g;
+  inflate(tg.view(), InflationSettings{}, g);
+  FrontierWorkspace ws;
+  EXPECT_EQ(find_frontier(g, g.cell_center(4, 15), GoalBlacklist{}, 0.0, FrontierSettings{}, ws).status,
+            FrontierStatus::kRobotBlocked);  // in the wall, nothing traversable within 0.2 m
+  EXPECT_EQ(find_frontier(g, Eigen::Vector2f(-100.0f, 0.0f), GoalBlacklist{}, 0.0, FrontierSettings{}, ws).status,
+            FrontierStatus::kRobotBlocked);
+  EXPECT_EQ(find_frontier(g, Eigen::Vector2f(kNaN, 0.0f), GoalBlacklist{}, 0.0, FrontierSettings{}, ws).status,
+            FrontierStatus::kRobotBlocked);
+  // A free strip touching the grid's top border; unknown only in the top row next to it: its
+  // frontier cells are on the border row - 1 and border -> only the non-border ones are connected.
+  TestGrid strip = blank(30, 10, kFree);
+  strip.rect(0, 9, 29, 9, kNaN);  // unknown top row
+  strip.rect(0, 0, 29, 7, kOcc);  // walls below: the free row y = 8 is a corridor
+  InflationSettings is;
+  is.robot_radius_m = 0.0f;
+  inflate(strip.view(), is, g);
+  FrontierSettings s;
+  s.min_goal_distance_m = 0.0f;
+  FrontierResult r = find_frontier(g, g.cell_center(5, 8), GoalBlacklist{}, 0.0, s, ws);
+  ASSERT_EQ(r.status, FrontierStatus::kFound);
+  const Eigen::Vector2i gc = g.cell_of(r.goal_xy);
+  EXPECT_EQ(gc, Eigen::Vector2i(5, 8));
+  // Frontier only on the left border column: not connected -> unreachable.
+  TestGrid col = blank(10, 10, kFree);
+  col.rect(0, 0, 0, 9, kNaN);
+  inflate(col.view(), is, g);
+  r = find_frontier(g, g.cell_center(5, 5), GoalBlacklist{}, 0.0, s, ws);
+  ASSERT_EQ(r.clusters.size(), 1u);
+  EXPECT_EQ(r.clusters[0].cells, 10);  // column x = 1
+  EXPECT_EQ(r.status, FrontierStatus::kFound);  // x = 1, y in 1..8 are connected
+  EXPECT_EQ(g.cell_of(r.goal_xy).x(), 1);
+  TestGrid corner = blank(3, 3, kFree);
+  corner.set(0, 0, kNaN);
+  inflate(corner.view(), is, g);
+  r = find_frontier(g, g.cell_center(2, 2), GoalBlacklist{}, 0.0, s, ws);
+  EXPECT_EQ(r.status, FrontierStatus::kFound);  // (1, 1) is the one connected frontier cell
+  EXPECT_EQ(g.cell_of(r.goal_xy), Eigen::Vector2i(1, 1));
+  TestGrid tiny = blank(2, 2, kFree);
+  tiny.set(0, 0, kNaN);
+  inflate(tiny.view(), is, g);
+  FrontierSettings s1 = s;
+  s1.min_cluster_cells = 1;
+  r = find_frontier(g, g.cell_center(1, 1), GoalBlacklist{}, 0.0, s1, ws);
+  EXPECT_EQ(r.status, FrontierStatus::kAllUnreachable);  // 2x2: no cell has 8 neighbours
+  EXPECT_TRUE(r.clusters[0].reachable);
+}
+
+TEST(Frontier, BlacklistClass) {
+  GoalBlacklist bl;
+  EXPECT_EQ(bl.size(), 0u);
+  EXPECT_FALSE(bl.blocks({0, 0}, 1.0f, 0.0));
+  bl.add({1.0f, 2.0f}, 10.0, 5.0);
+  bl.add({-4.0f, 0.0f}, 10.0, std::numeric_limits<double>::infinity());
+  EXPECT_TRUE(bl.blocks({1.5f, 2.0f}, 0.5f, 12.0));   // 0.5 away (exact in float): inclusive
+  EXPECT_FALSE(bl.blocks({1.3f, 2.41f}, 0.5f, 12.0));
+  EXPECT_FALSE(bl.blocks({1.0f, 2.0f}, 0.5f, 15.0));  // expired at 15
+  EXPECT_TRUE(bl.blocks({-4.0f, 0.0f}, 0.0f, 1e12));
+  bl.expire(15.0);
+  EXPECT_EQ(bl.size(), 1u);
+  bl.clear();
+  EXPECT_EQ(bl.size(), 0u);
+  EXPECT_DUET_ERROR(bl.add({kNaN, 0.0f}, 0.0, 1.0), ErrorCode::kInvalidArgument, "xy");
+  EXPECT_DUET_ERROR(bl.add({0.0f, 0.0f}, kNaN, 1.0), ErrorCode::kInvalidArgument, "now_s");
+  EXPECT_DUET_ERROR(bl.add({0.0f, 0.0f}, 0.0, 0.0), ErrorCode::kInvalidArgument, "ttl_s");
+  EXPECT_DUET_ERROR(bl.add({0.0f, 0.0f}, 0.0, -1.0), ErrorCode::kInvalidArgument, "ttl_s");
+}
+
+TEST(Frontier, InvalidSettings) {
+  const TestGrid tg = closed_room();
+  InflatedGrid g;
+  inflate(tg.view(), InflationSettings{}, g);
+  FrontierWorkspace ws;
+  FrontierSettings s;
+  s.min_cluster_cells = 0;
+  EXPECT_DUET_ERROR((void)find_frontier(g, {0, 0}, GoalBlacklist{}, 0.0, s, ws), ErrorCode::kInvalidArgument, "min_cluster_cells");
+  s = FrontierSettings{};
+  s.min_goal_distance_m = -1.0f;
+  EXPECT_DUET_ERROR((void)find_frontier(g, {0, 0}, GoalBlacklist{}, 0.0, s, ws), ErrorCode::kInvalidArgument, "min_goal_distance_m");
+  s = FrontierSettings{};
+  s.blacklist_radius_m = kNaN;
+  EXPECT_DUET_ERROR((void)find_frontier(g, {0, 0}, GoalBlacklist{}, 0.0, s, ws), ErrorCode::kInvalidArgument, "blacklist_radius_m");
+  g.state.pop_back();
+  EXPECT_DUET_ERROR((void)find_frontier(g, {0, 0}, GoalBlacklist{}, 0.0, FrontierSettings{}, ws), ErrorCode::kInvalidArgument,
+                    "width*height");
+  InflatedGrid empty;
+  EXPECT_EQ(find_frontier(empty, {0, 0}, GoalBlacklist{}, 0.0, FrontierSettings{}, ws).status, FrontierStatus::kNoFrontier);
+  for (auto st : {FrontierStatus::kFound, FrontierStatus::kNoFrontier, FrontierStatus::kAllUnreachable,
+                  FrontierStatus::kAllBlacklisted, FrontierStatus::kRobotBlocked})
+    EXPECT_GT(std::string(to_string(st)).size(), 3u);
+}
+
+TEST(Frontier, ThreadCountIndependentAndWorkspaceReuse) {
+  const TestGrid tg = explored(500, 380, 2024);
+  InflatedGrid g;
+  inflate(tg.view(), InflationSettings{}, g);
+  std::size_t start = 0;
+  for (std::size_t i = g.cell_count() / 2; i < g.cell_count(); ++i)
+    if (g.traversable[i]) {
+      start = i;
+      break;
+    }
+  FrontierWorkspace w1, w2;
+  const FrontierResult a = test::in_arena(1, [&] { return find_frontier(g, g.cell_center(start), GoalBlacklist{}, 0.0, FrontierSettings{}, w1); });
+  const FrontierResult b = test::in_arena(2, [&] { return find_frontier(g, g.cell_center(start), GoalBlacklist{}, 0.0, FrontierSettings{}, w2); });
+  EXPECT_EQ(a.status, b.status);
+  EXPECT_EQ(a.goal_xy, b.goal_xy);
+  EXPECT_EQ(a.path, b.path);
+  ASSERT_EQ(a.clusters.size(), b.clusters.size());
+  for (std::size_t k = 0; k < a.clusters.size(); ++k) {
+    EXPECT_EQ(a.clusters[k].centroid, b.clusters[k].centroid);
+    EXPECT_EQ(a.clusters[k].nearest_xy, b.clusters[k].nearest_xy);
+    EXPECT_EQ(a.clusters[k].path_length_m, b.clusters[k].path_length_m);
+  }
+  // Reuse w1 on another grid, then on the first again.
+  const TestGrid other = explored(90, 200, 5);
+  InflatedGrid g2;
+  inflate(other.view(), InflationSettings{}, g2);
+  (void)find_frontier(g2, g2.cell_center(std::size_t{0}), GoalBlacklist{}, 0.0, FrontierSettings{}, w1);
+  const FrontierResult c = find_frontier(g, g.cell_center(start), GoalBlacklist{}, 0.0, FrontierSettings{}, w1);
+  EXPECT_EQ(c.goal_xy, a.goal_xy);
+  EXPECT_EQ(c.path, a.path);
+  check_against_reference(g, g.cell_center(start), GoalBlacklist{}, 0.0, FrontierSettings{}, a);
+}
+
+// ---- real data: the Willow Garage map ----------------------------------------------------------------
+
+constexpr const char* kWillow = "maps/willow-2010-02-18-0.10.pgm";
+
+// The Willow map as a log-odds grid with row 0 at the lowest y (the PGM's first row is the largest y).
+// The file is not strictly trinary: besides 0 / 254 / 205 it holds grey levels (walls drawn
+// anti-aliased, 0-204; light free space 206-253). With the .yaml thresholds (occupied p > 0.65,
+// i.e. v < 90) only 544 cells would be occupied and the walls would read as unknown, so: 205 =
+// unknown (NaN), darker = occupied, lighter = free.
+TestGrid load_willow() {
+  const cv::Mat img = cv::imread(test::data_path(kWillow).string(), cv::IMREAD_GRAYSCALE);
+  TestGrid g;
+  if (img.empty()) return g;
+  g.w = img.cols;
+  g.h = img.rows;
+  g.res = 0.10f;
+  g.origin = {0.0f, 0.0f};
+  g.l.resize(static_cast<std::size_t>(g.w) * static_cast<std::size_t>(g.h));
+  for (int r = 0; r < img.rows; ++r)
+    for (int c = 0; c < img.cols; ++c) {
+      const int v = img.at<std::uint8_t>(r, c);
+      g.l[static_cast<std::size_t>((img.rows - 1 - r) * g.w + c)] = v == 205 ? kNaN : v < 205 ? kOcc : kFree;
+    }
+  return g;
+}
+
+TEST(Frontier, WillowMapFrontierAndPath) {
+  DUET_REQUIRE_DATA(kWillow);
+  const TestGrid tg = load_willow();
+  ASSERT_GT(tg.w, 0) << "cannot decode " << kWillow;
+  InflatedGrid g;
+  inflate(tg.view(), InflationSettings{}, g);
+  // Robot: the traversable cell with the largest clearance (deterministic; inside the building).
+  std::size_t robot = 0;
+  float best = -1.0f;
+  for (std::size_t i = 0; i < g.cell_count(); ++i)
+    if (g.traversable[i] && std::isfinite(g.clearance_m[i]) && g.clearance_m[i] > best) {
+      best = g.clearance_m[i];
+      robot = i;
+    }
+  ASSERT_TRUE(g.traversable[robot]);
+  const Eigen::Vector2f robot_xy = g.cell_center(robot);
+  FrontierWorkspace ws1, ws2;
+  const FrontierSettings s;
+  const FrontierResult a = test::in_arena(1, [&] { return find_frontier(g, robot_xy, GoalBlacklist{}, 0.0, s, ws1); });
+  const FrontierResult b = test::in_arena(2, [&] { return find_frontier(g, robot_xy, GoalBlacklist{}, 0.0, s, ws2); });
+  ASSERT_EQ(a.status, FrontierStatus::kFound) << to_string(a.status);
+  EXPECT_EQ(a.goal_xy, b.goal_xy);
+  EXPECT_EQ(a.path, b.path);
+  EXPECT_EQ(a.clusters.size(), b.clusters.size());
+  EXPECT_GT(a.clusters.size(), 5u);
+  check_against_reference(g, robot_xy, GoalBlacklist{}, 0.0, s, a);
+  // plan_path with no clearance cost runs on the same graph: same length to the goal.
+  PathWorkspace pws;
+  PathSettings ps;
+  ps.clearance_weight = 0.0f;
+  const PathResult p0 = plan_path(g, robot_xy, a.goal_xy, ps, pws);
+  ASSERT_EQ(p0.status, PathStatus::kFound);
+  EXPECT_NEAR(p0.length_m, a.path_length_m, 1e-3f);
+  const PathResult p = plan_path(g, robot_xy, a.goal_xy, PathSettings{}, pws);
+  ASSERT_EQ(p.status, PathStatus::kFound);
+  EXPECT_GE(p.length_m, p0.length_m - 1e-4f);
+  EXPECT_GE(p.cost, p.length_m);
+  for (const auto& wp : p.waypoints) {
+    const Eigen::Vector2i c = g.cell_of(wp);
+    ASSERT_TRUE(g.traversable[g.index(c.x(), c.y())]);
+  }
+  // Blacklisting the goal moves the goal elsewhere (or reports why not).
+  GoalBlacklist bl;
+  bl.add(a.goal_xy, 0.0, 60.0);
+  const FrontierResult c = find_frontier(g, robot_xy, bl, 1.0, s, ws1);
+  check_against_reference(g, robot_xy, bl, 1.0, s, c);
+  if (c.status == FrontierStatus::kFound) {
+    EXPECT_GT((c.goal_xy - a.goal_xy).norm(), s.blacklist_radius_m);
+  }
+}
+
+}  // namespace
+}  // namespace duet

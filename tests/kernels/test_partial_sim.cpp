@@ -1,0 +1,303 @@
+// Procedure 1 (partial map simulation) and the combined strategy of Fig. 6 on hand-made grids.
+#include <duet/kernels/entropy.hpp>
+#include <duet/kernels/error.hpp>
+#include <duet/kernels/exploration.hpp>
+#include <duet/kernels/partial_sim.hpp>
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <set>
+#include <vector>
+
+namespace duet {
+namespace {
+
+constexpr float kFreeL = -2.0f;  // clamped free (GridUpdateSettings.min_logodds)
+constexpr float kOccL = 3.5f;    // clamped occupied
+const float kUnknown = std::numeric_limits<float>::quiet_NaN();
+
+// A w x h grid at 0.05 m, all unknown, origin (0, 0).
+struct TestGrid {
+  int w, h;
+  float res = 0.05f;
+  std::vector<float> l;
+  TestGrid(int w_, int h_) : w(w_), h(h_), l(static_cast<std::size_t>(w_) * static_cast<std::size_t>(h_), kUnknown) {}
+  float& at(int x, int y) { return l[static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x)]; }
+  void fill(int x0, int y0, int x1, int y1, float v) {  // [x0, x1) x [y0, y1)
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) at(x, y) = v;
+  }
+  // A room: free interior [x0, x1) x [y0, y1), walls one cell thick around it.
+  void room(int x0, int y0, int x1, int y1) {
+    fill(x0 - 1, y0 - 1, x1 + 1, y1 + 1, kOccL);
+    fill(x0, y0, x1, y1, kFreeL);
+  }
+  [[nodiscard]] GridView view() const { return GridView(l, w, h, res, Eigen::Vector2f(0.0f, 0.0f)); }
+};
+
+struct Prepared {
+  ObservationModel model;
+  InflatedGrid inflated;
+  explicit Prepared(const TestGrid& g, ObservationBackend backend = ObservationBackend::kDda)
+      : model([&] {
+          ObservationSettings os;
+          os.backend = backend;
+          return os;
+        }()) {
+    model.set_grid(g.view());
+    inflate(g.view(), InflationSettings{}, inflated);
+  }
+};
+
+// 10 m x 10 m world: a 4 m x 4 m known room at [1, 5) x [3, 7) m with a door (1 m) in its east
+// wall leading to the unknown; the robot in the west half, facing west (both sensors see walls).
+TestGrid door_room() {
+  TestGrid g(200, 200);
+  g.room(20, 60, 100, 140);
+  for (int y = 90; y < 110; ++y) g.at(100, y) = kFreeL;  // the door: free cells in the east wall
+  return g;
+}
+
+TEST(PartialSim, DoorRoomGoalPointsToTheUnknownSide) {
+  const TestGrid g = door_room();
+  Prepared p(g);
+  const Pose2 robot{2.0f, 5.0f, 3.14159f};
+  const auto sensors = paper_dual_sensors(30);
+  PartialSimWorkspace ws;
+  PartialSimSettings s;
+  const PartialSimResult r = partial_map_simulation(p.model, p.inflated, robot, sensors, s, ws);
+  ASSERT_TRUE(r.found);
+  EXPECT_GT(r.reward_bits, ExplorationSettings{}.eps_r_bits);
+  // The robot starts facing west (away from the door, both sensors see known walls); at the goal
+  // one of the two sensors faces the door (east) and sees more entropy than at the start.
+  float best_cos = -1.0f;
+  for (const SensorSector& sec : sensors) best_cos = std::max(best_cos, std::cos(r.goal.theta + sec.yaw_rad));
+  EXPECT_GT(best_cos, 0.7f) << "goal " << r.goal.x << " " << r.goal.y << " " << r.goal.theta;
+  EXPECT_GT(p.model.information_bits(r.goal, sensors), p.model.information_bits(robot, sensors));
+  // Goal distance band (issue 3: 0.5-10 m).
+  const float d = std::hypot(r.goal.x - robot.x, r.goal.y - robot.y);
+  EXPECT_GE(d, s.min_goal_distance_m);
+  EXPECT_LE(d, s.max_goal_distance_m);
+  // The best rollout stays on traversable cells (re-simulated here with plain Eq. 4 steps).
+  ASSERT_EQ(r.best_motions.size(), static_cast<std::size_t>(s.stages));
+  Pose2 x = robot;
+  const Eigen::Vector2i start = p.inflated.cell_of(Eigen::Vector2f(robot.x, robot.y));
+  for (const Twist& u : r.best_motions) {
+    for (int q = 0; q < 200; ++q) {
+      x = motion_step(x, u, s.stage_dt_s / 200.0f);
+      Eigen::Vector2i c;
+      ASSERT_TRUE(p.inflated.cell_of(Eigen::Vector2f(x.x, x.y), c));
+      if (c == start) continue;
+      EXPECT_TRUE(p.inflated.traversable[p.inflated.index(c.x(), c.y())]) << "rollout crosses a blocked cell at " << x.x << "," << x.y;
+    }
+  }
+  EXPECT_NEAR(x.x, r.goal.x, 1e-3f);
+  EXPECT_NEAR(x.y, r.goal.y, 1e-3f);
+  // Weights: normalised, and n_m has the largest.
+  double sum = 0.0;
+  for (float w : r.weights) sum += w;
+  EXPECT_NEAR(sum, 1.0, 1e-6);
+  ASSERT_GE(r.best_particle, 0);
+  for (float w : r.weights) EXPECT_LE(w, r.weights[static_cast<std::size_t>(r.best_particle)]);
+  EXPECT_GT(r.cells_visited, 0);
+  EXPECT_GT(r.valid_particles, 0);
+}
+
+TEST(PartialSim, SameResultWithOneAndTwoThreads) {
+  const TestGrid g = door_room();
+  Prepared p(g);
+  const Pose2 robot{2.0f, 5.0f, 0.3f};
+  const auto sensors = paper_dual_sensors(30);
+  PartialSimSettings s;
+  s.seed = 42;
+  PartialSimResult r1, r2;
+  tbb::task_arena(1).execute([&] {
+    PartialSimWorkspace ws;
+    r1 = partial_map_simulation(p.model, p.inflated, robot, sensors, s, ws);
+  });
+  tbb::task_arena(2).execute([&] {
+    PartialSimWorkspace ws;
+    r2 = partial_map_simulation(p.model, p.inflated, robot, sensors, s, ws);
+    // and again with the same (warm) workspace
+    const PartialSimResult r3 = partial_map_simulation(p.model, p.inflated, robot, sensors, s, ws);
+    EXPECT_EQ(r3.weights, r2.weights);
+  });
+  EXPECT_EQ(r1.found, r2.found);
+  EXPECT_EQ(r1.best_particle, r2.best_particle);
+  EXPECT_EQ(r1.goal.x, r2.goal.x);
+  EXPECT_EQ(r1.goal.y, r2.goal.y);
+  EXPECT_EQ(r1.goal.theta, r2.goal.theta);
+  EXPECT_EQ(r1.reward_bits, r2.reward_bits);
+  EXPECT_EQ(r1.weights, r2.weights);
+  EXPECT_EQ(r1.resamples, r2.resamples);
+  EXPECT_EQ(r1.cells_visited, r2.cells_visited);
+  // A different seed gives a different (valid) answer.
+  s.seed = 43;
+  PartialSimWorkspace ws;
+  const PartialSimResult r4 = partial_map_simulation(p.model, p.inflated, robot, sensors, s, ws);
+  EXPECT_NE(r4.weights, r1.weights);
+}
+
+// Lines 10-17 against a hand computation: one particle, one deterministic straight motion, one
+// sample, no noise, every cell within sensor range known free at l = -0.4: the reward is the
+// number of distinct cells the fans cross times E(-0.4) - E(-0.8).
+TEST(PartialSim, RewardMatchesHandComputationOnKnownFreeCells) {
+  TestGrid g(400, 400);
+  g.fill(0, 0, 400, 400, -0.4f);
+  Prepared p(g);
+  PartialSimSettings s;
+  s.iterations = 1;
+  s.particles = 1;
+  s.phi_a = 0;
+  s.phi_b = 1;
+  s.stages = 1;
+  s.v_min_mps = s.v_max_mps = 1.0f;
+  s.omega_max_rps = 0.0f;
+  s.ism_noise_logodds = 0.0f;
+  const Pose2 robot{10.0f, 10.0f, 0.7f};
+  const auto sensors = paper_dual_sensors(30);
+  PartialSimWorkspace ws;
+  const PartialSimResult r = partial_map_simulation(p.model, p.inflated, robot, sensors, s, ws);
+  ASSERT_TRUE(r.found);
+  const Pose2 x1 = motion_step(robot, Twist{1.0f, 0.0f}, 1.0f);
+  EXPECT_NEAR(r.goal.x, x1.x, 1e-5f);
+  EXPECT_NEAR(r.goal.y, x1.y, 1e-5f);
+  std::set<std::pair<int, int>> cells;
+  for (const SensorSector& sec : sensors) {
+    std::vector<Eigen::Vector2f> o(static_cast<std::size_t>(sec.rays)), d(static_cast<std::size_t>(sec.rays));
+    sector_rays(x1, sec, o, d);
+    for (std::size_t i = 0; i < o.size(); ++i)
+      walk_cells(g.view(), o[i], d[i], sec.min_range_m, sec.max_range_m, [&](int ix, int iy, float, float) {
+        cells.insert({ix, iy});
+        return true;
+      });
+  }
+  const double per_cell = static_cast<double>(entropy_bits(-0.4f)) - static_cast<double>(entropy_bits(-0.8f));
+  EXPECT_NEAR(r.reward_bits, per_cell * static_cast<double>(cells.size()), 1e-3 * per_cell * static_cast<double>(cells.size()));
+}
+
+// A fully known closed room: nothing to learn (cells at the clamps), so R_g <= eps_R and the
+// frontier search runs and finds no frontier.
+TEST(Exploration, ClosedKnownRoomSaysNoFrontier) {
+  TestGrid g(120, 120);
+  g.room(10, 10, 110, 110);
+  Prepared p(g);
+  const auto sensors = paper_dual_sensors(30);
+  ExplorationWorkspace ws;
+  ExplorationSettings s;
+  GoalBlacklist bl;
+  const ExplorationDecision d = decide_goal(p.model, p.inflated, Pose2{3.0f, 3.0f, 0.0f}, sensors, bl, 0.0, s, ws);
+  EXPECT_LE(d.reward_bits, s.eps_r_bits);
+  EXPECT_EQ(d.status, ExplorationStatus::kNoFrontier) << to_string(d.status);
+  EXPECT_FALSE(d.has_goal());
+}
+
+TEST(Exploration, DoorRoomTakesTheSimulatedGoal) {
+  const TestGrid g = door_room();
+  Prepared p(g);
+  const auto sensors = paper_dual_sensors(30);
+  ExplorationWorkspace ws;
+  ExplorationSettings s;
+  GoalBlacklist bl;
+  const ExplorationDecision d = decide_goal(p.model, p.inflated, Pose2{2.0f, 5.0f, 3.14159f}, sensors, bl, 0.0, s, ws);
+  EXPECT_EQ(d.status, ExplorationStatus::kSimulatedGoal) << to_string(d.status);
+  EXPECT_GT(d.reward_bits, s.eps_r_bits);
+  EXPECT_EQ(d.goal.x, d.simulation.goal.x);
+}
+
+// R_g <= eps_R (a threshold no simulation reaches): the frontier goal, at the door.
+TEST(Exploration, LowRewardFallsBackToTheFrontier) {
+  const TestGrid g = door_room();
+  Prepared p(g);
+  const auto sensors = paper_dual_sensors(30);
+  ExplorationWorkspace ws;
+  ExplorationSettings s;
+  s.eps_r_bits = 1e9f;
+  GoalBlacklist bl;
+  const ExplorationDecision d = decide_goal(p.model, p.inflated, Pose2{2.0f, 5.0f, 3.14159f}, sensors, bl, 0.0, s, ws);
+  ASSERT_EQ(d.status, ExplorationStatus::kFrontierGoal) << to_string(d.status);
+  EXPECT_NEAR(d.goal.x, 5.0f, 0.2f);  // the door is the east wall, x = 5.0 .. 5.05 m
+  EXPECT_GT(d.goal.y, 4.4f);
+  EXPECT_LT(d.goal.y, 5.6f);
+  // Blacklisting the door leaves nothing reachable but blacklisted.
+  bl.add(Eigen::Vector2f(5.0f, 5.0f), 0.0, 60.0);
+  s.frontier.blacklist_radius_m = 1.0f;
+  const ExplorationDecision d2 = decide_goal(p.model, p.inflated, Pose2{2.0f, 5.0f, 3.14159f}, sensors, bl, 1.0, s, ws);
+  EXPECT_EQ(d2.status, ExplorationStatus::kAllBlacklisted) << to_string(d2.status);
+  // After expiry the door is a goal again.
+  const ExplorationDecision d3 = decide_goal(p.model, p.inflated, Pose2{2.0f, 5.0f, 3.14159f}, sensors, bl, 61.0, s, ws);
+  EXPECT_EQ(d3.status, ExplorationStatus::kFrontierGoal) << to_string(d3.status);
+}
+
+TEST(PartialSim, EmbreeAndDdaModelsGiveTheSameDecision) {
+  const TestGrid g = door_room();
+  Prepared pd(g, ObservationBackend::kDda), pe(g, ObservationBackend::kEmbree);
+  const auto sensors = paper_dual_sensors(30);
+  PartialSimWorkspace w1, w2;
+  const Pose2 robot{2.0f, 5.0f, 1.0f};
+  const PartialSimResult a = partial_map_simulation(pd.model, pd.inflated, robot, sensors, PartialSimSettings{}, w1);
+  const PartialSimResult b = partial_map_simulation(pe.model, pe.inflated, robot, sensors, PartialSimSettings{}, w2);
+  EXPECT_EQ(a.weights, b.weights);
+  EXPECT_EQ(a.goal.x, b.goal.x);
+}
+
+// Robot boxed in by obstacles: every rollout is rejected, nothing found, R_g = 0.
+TEST(PartialSim, AllRolloutsRejectedGivesNoGoal) {
+  TestGrid g(100, 100);
+  g.room(40, 40, 52, 52);  // 0.6 m square: the inflated radius 0.2 m leaves ~no room to move 0.5 m
+  Prepared p(g);
+  PartialSimWorkspace ws;
+  const PartialSimResult r =
+      partial_map_simulation(p.model, p.inflated, Pose2{2.3f, 2.3f, 0.0f}, paper_dual_sensors(30), PartialSimSettings{}, ws);
+  EXPECT_FALSE(r.found);
+  EXPECT_EQ(r.reward_bits, 0.0f);
+  EXPECT_EQ(r.valid_particles, 0);
+  EXPECT_EQ(r.goal.x, 2.3f);
+}
+
+TEST(PartialSim, InvalidInputsThrow) {
+  const TestGrid g = door_room();
+  Prepared p(g);
+  const auto sensors = paper_dual_sensors(30);
+  PartialSimWorkspace ws;
+  const Pose2 robot{2.0f, 5.0f, 0.0f};
+  auto expect_throw = [&](PartialSimSettings s) {
+    EXPECT_THROW((void)partial_map_simulation(p.model, p.inflated, robot, sensors, s, ws), Error);
+  };
+  PartialSimSettings s;
+  s.iterations = 0;
+  expect_throw(s);
+  s = {};
+  s.particles = 0;
+  expect_throw(s);
+  s = {};
+  s.phi_a = -1;  // phi_1 = 0
+  s.phi_b = 1;
+  expect_throw(s);
+  s = {};
+  s.gamma = std::nanf("");
+  expect_throw(s);
+  s = {};
+  s.unknown_hit_probability = 1.0f;
+  expect_throw(s);
+  s = {};
+  s.ism_noise_logodds = 0.5f;  // would flip a miss (-0.4) into a hit
+  expect_throw(s);
+  s = {};
+  s.max_goal_distance_m = 0.1f;
+  expect_throw(s);
+  EXPECT_THROW((void)partial_map_simulation(p.model, p.inflated, Pose2{std::nanf(""), 0.0f, 0.0f}, sensors, {}, ws), Error);
+  EXPECT_THROW((void)partial_map_simulation(p.model, p.inflated, robot, std::span<const SensorSector>{}, {}, ws), Error);
+  InflatedGrid other;
+  TestGrid small(10, 10);
+  inflate(small.view(), InflationSettings{}, other);
+  EXPECT_THROW((void)partial_map_simulation(p.model, other, robot, sensors, {}, ws), Error);
+  ExplorationSettings es;
+  es.eps_r_bits = -1.0f;
+  EXPECT_THROW(validate(es), Error);
+}
+
+}  // namespace
+}  // namespace duet
