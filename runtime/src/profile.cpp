@@ -58,6 +58,9 @@ constexpr Range kMinDepth{0.0, 100.0, false, true, "m"};
 constexpr Range kMaxDepth{0.0, 100.0, true, false, "m"};
 constexpr Range kDepthUnits{0.0, 1e6, true, false, "units/m"};
 constexpr Range kOffset{-10.0, 10.0, false, false, "m"};
+constexpr Range kRaysPerSensor{1.0, 10000.0, false, false, ""};
+constexpr Range kAnyInt{-2147483648.0, 2147483647.0, false, false, ""};
+constexpr Range kSeed{0.0, 9007199254740992.0, false, false, ""};
 constexpr Range kEuler{-360.0, 360.0, false, false, "deg"};
 constexpr Range kPixelStep{1.0, 64.0, false, false, ""};
 constexpr Range kLeaf{0.0, 10.0, true, false, "m"};
@@ -259,7 +262,37 @@ void validate_impl(const Profile& p, const Locator& loc) {
   c.range("mapping.grid_update.grow_margin_cells", gu.grow_margin_cells, kGrowMargin);
   c.range("mapping.grid_resolution_m", m.grid_resolution_m, kGridResolution);
 
+  const ExplorationProfile& ex = p.exploration;
+  c.range("exploration.rays_per_sensor", ex.rays_per_sensor, kRaysPerSensor);
+  if (ex.inflation.robot_radius_m < ch.radius_m)
+    c.fail_at("exploration.inflation.robot_radius_m",
+              "must be at least chassis.radius_m (" + format_number(ch.radius_m) + " m), got " +
+                  format_number(ex.inflation.robot_radius_m));
+  if (ex.dwa.limits.max_v_mps > ch.max_linear_speed_mps)
+    c.fail_at("exploration.dwa.max_v_mps", "must not exceed chassis.max_linear_speed_mps (" +
+                                               format_number(ch.max_linear_speed_mps) + " m/s), got " +
+                                               format_number(ex.dwa.limits.max_v_mps));
+  if (ex.dwa.limits.max_omega_rps > ch.max_angular_speed_dps * kDegToRad * (1.0 + 1e-6))
+    c.fail_at("exploration.dwa.max_omega_rps", "must not exceed chassis.max_angular_speed_dps (" +
+                                                   format_number(ch.max_angular_speed_dps * kDegToRad) +
+                                                   " rad/s), got " + format_number(ex.dwa.limits.max_omega_rps));
+  if (ex.strategy.simulation.v_max_mps > ch.max_linear_speed_mps)
+    c.fail_at("exploration.simulation.v_max_mps", "must not exceed chassis.max_linear_speed_mps (" +
+                                                      format_number(ch.max_linear_speed_mps) + " m/s), got " +
+                                                      format_number(ex.strategy.simulation.v_max_mps));
+
   // The kernels' own checks (defence in depth: a kernel may know a constraint we do not).
+  c.kernel("exploration.cells", [&] { validate(ex.cells); });
+  c.kernel("exploration.observation", [&] { validate(ex.observation); });
+  c.kernel("exploration.inflation", [&] { validate(ex.inflation); });
+  c.kernel("exploration.path", [&] { validate(ex.path); });
+  c.kernel("exploration.frontier", [&] { validate(ex.strategy.frontier); });
+  c.kernel("exploration.simulation", [&] { validate(ex.strategy.simulation); });
+  c.kernel("exploration", [&] { validate(ex.strategy); });
+  c.kernel("exploration.dwa", [&] {
+    validate(ex.dwa.limits);
+    validate(ex.dwa);
+  });
   c.kernel("mapping.back_projection", [&] { validate(bp); });
   c.kernel("mapping.voxel_filter", [&] { validate(m.voxel_filter); });
   c.kernel("mapping.normals", [&] { validate(m.normals); });
@@ -607,10 +640,137 @@ MappingSettings read_mapping(Reader& r, const YAML::Node& n) {
   return ms;
 }
 
+ExplorationProfile read_exploration(Reader& r, const YAML::Node& n, const ChassisProfile& chassis) {
+  ExplorationProfile ex;
+  // Speed defaults never exceed the chassis (keys given explicitly are range-checked instead).
+  const auto max_v = static_cast<float>(chassis.max_linear_speed_mps);
+  const auto max_w = static_cast<float>(chassis.max_angular_speed_dps * kDegToRad);
+  ex.dwa.limits.max_v_mps = std::min(ex.dwa.limits.max_v_mps, max_v);
+  ex.dwa.limits.max_omega_rps = std::min(ex.dwa.limits.max_omega_rps, max_w);
+  ex.strategy.simulation.v_max_mps = std::min(ex.strategy.simulation.v_max_mps, max_v);
+  ex.strategy.simulation.v_min_mps = std::min(ex.strategy.simulation.v_min_mps, ex.strategy.simulation.v_max_mps);
+  // The inflation radius defaults to the chassis radius plus 2 cm when that exceeds 0.20 m.
+  ex.inflation.robot_radius_m = std::max(ex.inflation.robot_radius_m, chassis.radius_m + 0.02f);
+  MapReader m(r, n, "exploration",
+              {"rays_per_sensor", "cells", "observation", "inflation", "path", "frontier", "simulation", "eps_r_bits",
+               "use_simulation", "dwa"});
+  m.opt_int("rays_per_sensor", ex.rays_per_sensor, kRaysPerSensor);
+  if (const YAML::Node b = m.get("cells")) {
+    MapReader q(r, b, m.path_of("cells"), {"occupied_logodds", "free_logodds"});
+    q.opt_real("occupied_logodds", ex.cells.occupied_logodds);
+    q.opt_real("free_logodds", ex.cells.free_logodds);
+  }
+  if (const YAML::Node b = m.get("observation")) {
+    MapReader q(r, b, m.path_of("observation"), {"backend", "tile_cells"});
+    std::string backend;
+    q.opt_string("backend", backend);
+    if (backend == "dda") ex.observation.backend = ObservationBackend::kDda;
+    else if (backend == "embree") ex.observation.backend = ObservationBackend::kEmbree;
+    else if (!backend.empty())
+      r.parse_error(q.get("backend"), q.path_of("backend"), "must be one of: dda, embree; got '" + backend + "'");
+    q.opt_int("tile_cells", ex.observation.tile_cells, kAnyInt);
+  }
+  if (const YAML::Node b = m.get("inflation")) {
+    MapReader q(r, b, m.path_of("inflation"), {"robot_radius_m", "unknown_is_obstacle"});
+    q.opt_real("robot_radius_m", ex.inflation.robot_radius_m);
+    q.opt_bool("unknown_is_obstacle", ex.inflation.unknown_is_obstacle);
+  }
+  if (const YAML::Node b = m.get("path")) {
+    MapReader q(r, b, m.path_of("path"), {"allow_diagonal", "clearance_weight", "clearance_decay_m", "goal_tolerance_m"});
+    q.opt_bool("allow_diagonal", ex.path.allow_diagonal);
+    q.opt_real("clearance_weight", ex.path.clearance_weight);
+    q.opt_real("clearance_decay_m", ex.path.clearance_decay_m);
+    q.opt_real("goal_tolerance_m", ex.path.goal_tolerance_m);
+  }
+  if (const YAML::Node b = m.get("frontier")) {
+    FrontierSettings& f = ex.strategy.frontier;
+    MapReader q(r, b, m.path_of("frontier"), {"min_cluster_cells", "min_goal_distance_m", "blacklist_radius_m"});
+    q.opt_int("min_cluster_cells", f.min_cluster_cells, kAnyInt);
+    q.opt_real("min_goal_distance_m", f.min_goal_distance_m);
+    q.opt_real("blacklist_radius_m", f.blacklist_radius_m);
+  }
+  if (const YAML::Node b = m.get("simulation")) {
+    PartialSimSettings& ps = ex.strategy.simulation;
+    MapReader q(r, b, m.path_of("simulation"),
+                {"iterations", "particles", "phi_a", "phi_b", "stages", "stage_dt_s", "v_min_mps", "v_max_mps",
+                 "omega_max_rps", "sigma_v_mps", "sigma_omega_rps", "resample_ess_fraction", "gamma",
+                 "unknown_hit_probability", "hit_logodds", "miss_logodds", "ism_noise_logodds", "min_logodds",
+                 "max_logodds", "min_goal_distance_m", "max_goal_distance_m", "collision_step_m", "seed"});
+    q.opt_int("iterations", ps.iterations, kAnyInt);
+    q.opt_int("particles", ps.particles, kAnyInt);
+    q.opt_int("phi_a", ps.phi_a, kAnyInt);
+    q.opt_int("phi_b", ps.phi_b, kAnyInt);
+    q.opt_int("stages", ps.stages, kAnyInt);
+    q.opt_real("stage_dt_s", ps.stage_dt_s);
+    q.opt_real("v_min_mps", ps.v_min_mps);
+    q.opt_real("v_max_mps", ps.v_max_mps);
+    q.opt_real("omega_max_rps", ps.omega_max_rps);
+    q.opt_real("sigma_v_mps", ps.sigma_v_mps);
+    q.opt_real("sigma_omega_rps", ps.sigma_omega_rps);
+    q.opt_real("resample_ess_fraction", ps.resample_ess_fraction);
+    q.opt_real("gamma", ps.gamma);
+    q.opt_real("unknown_hit_probability", ps.unknown_hit_probability);
+    q.opt_real("hit_logodds", ps.hit_logodds);
+    q.opt_real("miss_logodds", ps.miss_logodds);
+    q.opt_real("ism_noise_logodds", ps.ism_noise_logodds);
+    q.opt_real("min_logodds", ps.min_logodds);
+    q.opt_real("max_logodds", ps.max_logodds);
+    q.opt_real("min_goal_distance_m", ps.min_goal_distance_m);
+    q.opt_real("max_goal_distance_m", ps.max_goal_distance_m);
+    q.opt_real("collision_step_m", ps.collision_step_m);
+    q.opt_int("seed", ps.seed, kSeed);
+  }
+  m.opt_real("eps_r_bits", ex.strategy.eps_r_bits);
+  m.opt_bool("use_simulation", ex.strategy.use_simulation);
+  if (const YAML::Node b = m.get("dwa")) {
+    DwaSettings& d = ex.dwa;
+    MapReader q(r, b, m.path_of("dwa"),
+                {"max_v_mps", "min_v_mps", "max_omega_rps", "max_accel_mps2", "max_alpha_rps2", "mapping_max_omega_rps",
+                 "mapping_max_alpha_rps2", "control_period_s", "v_samples", "omega_samples", "steps", "sim_time_s",
+                 "safety_margin_m", "w_progress", "w_path", "w_clearance", "w_speed", "clearance_cap_m", "lookahead_m",
+                 "goal_tolerance_m", "oscillation_window_calls", "oscillation_min_progress_m",
+                 "oscillation_min_turn_rad", "recovery_max_calls", "rotate_omega_rps", "rotate_tolerance_rad",
+                 "backoff_distance_m", "backoff_speed_mps"});
+    q.opt_real("max_v_mps", d.limits.max_v_mps);
+    q.opt_real("min_v_mps", d.limits.min_v_mps);
+    q.opt_real("max_omega_rps", d.limits.max_omega_rps);
+    q.opt_real("max_accel_mps2", d.limits.max_accel_mps2);
+    q.opt_real("max_alpha_rps2", d.limits.max_alpha_rps2);
+    q.opt_real("mapping_max_omega_rps", d.mapping_max_omega_rps);
+    q.opt_real("mapping_max_alpha_rps2", d.mapping_max_alpha_rps2);
+    q.opt_real("control_period_s", d.control_period_s);
+    q.opt_int("v_samples", d.v_samples, kAnyInt);
+    q.opt_int("omega_samples", d.omega_samples, kAnyInt);
+    q.opt_int("steps", d.steps, kAnyInt);
+    q.opt_real("sim_time_s", d.sim_time_s);
+    q.opt_real("safety_margin_m", d.safety_margin_m);
+    q.opt_real("w_progress", d.w_progress);
+    q.opt_real("w_path", d.w_path);
+    q.opt_real("w_clearance", d.w_clearance);
+    q.opt_real("w_speed", d.w_speed);
+    q.opt_real("clearance_cap_m", d.clearance_cap_m);
+    q.opt_real("lookahead_m", d.lookahead_m);
+    q.opt_real("goal_tolerance_m", d.goal_tolerance_m);
+    q.opt_int("oscillation_window_calls", d.oscillation_window_calls, kAnyInt);
+    q.opt_real("oscillation_min_progress_m", d.oscillation_min_progress_m);
+    q.opt_real("oscillation_min_turn_rad", d.oscillation_min_turn_rad);
+    q.opt_int("recovery_max_calls", d.recovery_max_calls, kAnyInt);
+    q.opt_real("rotate_omega_rps", d.rotate_omega_rps);
+    q.opt_real("rotate_tolerance_rad", d.rotate_tolerance_rad);
+    q.opt_real("backoff_distance_m", d.backoff_distance_m);
+    q.opt_real("backoff_speed_mps", d.backoff_speed_mps);
+  }
+  // One source for what is shared: the thresholds, and the robot's radius.
+  ex.observation.thresholds = ex.cells;
+  ex.inflation.thresholds = ex.cells;
+  ex.dwa.robot_radius_m = ex.inflation.robot_radius_m;
+  return ex;
+}
+
 Profile parse_root(Reader& r, const YAML::Node& root, const std::string& source) {
   if (!root || root.IsNull())
     fail(ErrorCode::kParse, source + ": the document is empty; expected a mapping with keys {name, chassis, sensors}");
-  MapReader m(r, root, "", {"name", "description", "chassis", "sensors", "mapping"});
+  MapReader m(r, root, "", {"name", "description", "chassis", "sensors", "mapping", "exploration"});
   Profile p;
   m.need_string("name", p.name);
   m.opt_string("description", p.description);
@@ -625,6 +785,11 @@ Profile parse_root(Reader& r, const YAML::Node& root, const std::string& source)
   for (std::size_t i = 0; i < sensors.size(); ++i)
     p.sensors.push_back(read_sensor(r, sensors[i], "sensors[" + std::to_string(i) + "]"));
   if (const YAML::Node mapping = m.get("mapping")) p.mapping = read_mapping(r, mapping);
+  if (const YAML::Node ex = m.get("exploration")) {
+    p.exploration = read_exploration(r, ex, p.chassis);
+  } else {
+    p.exploration = read_exploration(r, YAML::Node(YAML::NodeType::Map), p.chassis);
+  }
   return p;
 }
 
@@ -743,6 +908,28 @@ Profile resolve_profile(std::string_view name_or_path) {
   const bool looks_like_path = s.find('/') != std::string::npos || s.ends_with(".yaml") || s.ends_with(".yml");
   if (looks_like_path || std::filesystem::is_regular_file(s, ec)) return load_profile(s);
   return builtin_profile(s);
+}
+
+}  // namespace duet
+
+namespace duet {
+
+std::vector<SensorSector> observation_sectors(const Profile& profile) {
+  std::vector<SensorSector> out;
+  out.reserve(profile.sensors.size());
+  for (const SensorProfile& s : profile.sensors) {
+    SensorSector sec;
+    sec.x_m = s.extrinsics.xyz_m.x();
+    sec.y_m = s.extrinsics.xyz_m.y();
+    sec.yaw_rad = static_cast<float>(s.extrinsics.zyx_euler_deg[0] * kDegToRad);  // theta (Eq. 6)
+    sec.fov_rad = static_cast<float>(s.fov_h_deg * kDegToRad);
+    sec.min_range_m = s.min_depth_m;
+    sec.max_range_m = s.max_depth_m;
+    sec.rays = profile.exploration.rays_per_sensor;
+    validate(sec);
+    out.push_back(sec);
+  }
+  return out;
 }
 
 }  // namespace duet

@@ -21,9 +21,15 @@
 #include <numbers>
 #include <queue>
 #include <random>
+#include <span>
 #include <vector>
 
 namespace duet {
+namespace detail {  // defined in kernels/src/frontier.cpp: allow_avx2 = false forces the SSE2 path
+std::size_t frontier_mask_isa(const GridView& grid, const CellThresholds& t, std::span<std::uint8_t> mask, bool allow_avx2);
+std::size_t frontier_mask_isa(std::span<const CellState> state, int width, int height, std::span<std::uint8_t> mask,
+                              bool allow_avx2);
+}  // namespace detail
 namespace {
 
 using test::kNaN;
@@ -246,7 +252,7 @@ void check_against_reference(const InflatedGrid& g, const Eigen::Vector2f& robot
 
 TEST(Frontier, MaskMatchesReference) {
   std::uint32_t seed = 1;
-  for (const auto& [w, h] : std::vector<std::pair<int, int>>{{1, 1}, {1, 9}, {9, 1}, {2, 2}, {33, 17}, {100, 70}, {257, 40}}) {
+  for (const auto& [w, h] : std::vector<std::pair<int, int>>{{1, 1}, {1, 9}, {9, 1}, {2, 2}, {33, 17}, {100, 70}, {257, 40}, {31, 5}, {32, 6}, {64, 64}, {1100, 9}}) {
     const TestGrid tg = explored(w, h, ++seed);
     CellThresholds t;
     std::vector<CellState> st(tg.l.size());
@@ -261,6 +267,12 @@ TEST(Frontier, MaskMatchesReference) {
     for (auto v : ref) cnt += v;
     EXPECT_EQ(n, cnt);
     EXPECT_EQ(n2, cnt);
+    // The baseline (SSE2) path gives the same bytes as the AVX2 one used on this CPU.
+    std::vector<std::uint8_t> m3(tg.l.size(), 5), m4(tg.l.size(), 6);
+    EXPECT_EQ(detail::frontier_mask_isa(tg.view(), t, m3, false), cnt);
+    EXPECT_EQ(detail::frontier_mask_isa(st, w, h, m4, false), cnt);
+    EXPECT_EQ(m3, ref) << w << "x" << h;
+    EXPECT_EQ(m4, ref) << w << "x" << h;
   }
   // Hand-made: a free cell next to an unknown one; the grid border is not unknown.
   TestGrid tg = blank(4, 3, kFree);

@@ -355,3 +355,73 @@ TEST(ProfileErrors, ValidateProfileBuiltInCode) {
     expect_contains(e.what(), "my_robot: mapping.grid_resolution_m: must be in (0, 10] m, got 0");
   }
 }
+
+// The exploration section (issue 3): the shipped values, the sensor fans, and errors that name
+// the key path.
+TEST(Profile, ExplorationSectionCarriesTheDefaultsAndTheSensorFans) {
+  const duet::Profile p = duet::load_profile(kProfiles / "dual_kinect_kobuki.yaml");
+  const duet::ExplorationProfile& ex = p.exploration;
+  EXPECT_EQ(ex.strategy.simulation.iterations, 5);
+  EXPECT_EQ(ex.strategy.simulation.particles, 100);
+  EXPECT_EQ(ex.strategy.simulation.stages, 4);
+  EXPECT_EQ(ex.observation.backend, duet::ObservationBackend::kDda);
+  EXPECT_FLOAT_EQ(ex.inflation.robot_radius_m, 0.20f);
+  EXPECT_FLOAT_EQ(ex.dwa.robot_radius_m, ex.inflation.robot_radius_m);  // one source
+  EXPECT_FLOAT_EQ(ex.observation.thresholds.occupied_logodds, ex.cells.occupied_logodds);
+  EXPECT_FLOAT_EQ(ex.dwa.limits.max_v_mps, 0.5f);
+  EXPECT_TRUE(ex.strategy.use_simulation);
+  // The profile's sensors give the paper's two fans (Eq. 6).
+  const auto fans = duet::observation_sectors(p);
+  const auto paper = duet::paper_dual_sensors(30);
+  ASSERT_EQ(fans.size(), paper.size());
+  for (std::size_t i = 0; i < fans.size(); ++i) {
+    EXPECT_NEAR(fans[i].x_m, paper[i].x_m, 1e-6f);
+    EXPECT_NEAR(fans[i].y_m, paper[i].y_m, 1e-6f);
+    EXPECT_NEAR(fans[i].yaw_rad, paper[i].yaw_rad, 1e-6f);
+    EXPECT_NEAR(fans[i].fov_rad, paper[i].fov_rad, 1e-6f);
+    EXPECT_EQ(fans[i].rays, 30);
+    EXPECT_FLOAT_EQ(fans[i].min_range_m, 0.5f);
+    EXPECT_FLOAT_EQ(fans[i].max_range_m, 5.0f);
+  }
+  EXPECT_EQ(duet::observation_sectors(duet::load_profile(kProfiles / "single_kinect_kobuki.yaml")).size(), 1u);
+  // Without the section: the C++ defaults, with speeds clamped to the chassis.
+  duet::Profile code = p;
+  code.exploration = duet::ExplorationProfile{};
+  EXPECT_NO_THROW(duet::validate(code));
+}
+
+TEST(ProfileErrors, ExplorationKeysAreCheckedLikeTheRest) {
+  TempDir dir;
+  {
+    const duet::Error e = load_error(dir, dual_with("    particles: 100 ", "    particle: 100 "));
+    EXPECT_EQ(e.code(), duet::ErrorCode::kParse);
+    expect_contains(e.what(), "exploration.simulation.particle: unknown key (did you mean 'particles'?)");
+  }
+  {
+    const duet::Error e = load_error(dir, dual_with("    iterations: 5 ", "    iterations: 0 "));
+    EXPECT_EQ(e.code(), duet::ErrorCode::kInvalidArgument);
+    expect_contains(e.what(), "exploration.simulation");
+    expect_contains(e.what(), "iterations");
+  }
+  {
+    const duet::Error e = load_error(dir, dual_with("    backend: dda ", "    backend: optix "));
+    expect_contains(e.what(), "exploration.observation.backend: must be one of: dda, embree; got 'optix'");
+  }
+  {
+    const duet::Error e = load_error(dir, dual_with("    max_v_mps: 0.5 ", "    max_v_mps: 0.9 "));
+    expect_contains(e.what(), "exploration.dwa.max_v_mps: must not exceed chassis.max_linear_speed_mps");
+  }
+  {
+    const duet::Error e = load_error(dir, dual_with("    robot_radius_m: 0.20 ", "    robot_radius_m: 0.10 "));
+    expect_contains(e.what(), "exploration.inflation.robot_radius_m: must be at least chassis.radius_m");
+  }
+  {
+    const duet::Error e = load_error(dir, dual_with("    gamma: 0.9 ", "    gamma: fast "));
+    EXPECT_EQ(e.code(), duet::ErrorCode::kParse);
+    expect_contains(e.what(), "exploration.simulation.gamma");
+  }
+  {
+    const duet::Error e = load_error(dir, dual_with("  eps_r_bits: 1.0 ", "  eps_r_bits: -1.0 "));
+    expect_contains(e.what(), "eps_r_bits");
+  }
+}

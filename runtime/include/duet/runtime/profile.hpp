@@ -19,7 +19,12 @@
 ///
 /// Thread safety: all functions are reentrant (no global mutable state); Profile is a value type.
 #include <duet/kernels/back_projection.hpp>
+#include <duet/kernels/dwa.hpp>
+#include <duet/kernels/exploration.hpp>
 #include <duet/kernels/grid.hpp>
+#include <duet/kernels/inflation.hpp>
+#include <duet/kernels/observation.hpp>
+#include <duet/kernels/path.hpp>
 #include <duet/kernels/normals.hpp>
 #include <duet/kernels/segmentation.hpp>
 #include <duet/kernels/voxel_filter.hpp>
@@ -112,13 +117,43 @@ struct MappingSettings {
   float grid_resolution_m = 0.05f;     ///< occupancy grid cell edge [m], (0, 10]
 };
 
+/// Settings of exploration and motion control (paper §3, Procedure 1, Fig. 6; DESIGN.md §1).
+/// YAML key `exploration` (optional, as are all its keys); sub-keys have the structs' field names:
+///   rays_per_sensor                  (the observation model's rays per sensor fan, [1, 10000])
+///   cells:       {occupied_logodds, free_logodds}   (shared by observation and inflation)
+///   observation: {backend: dda | embree, tile_cells}
+///   inflation:   {robot_radius_m, unknown_is_obstacle}   (also the dynamic window's radius;
+///                 must be >= chassis.radius_m)
+///   path:        {allow_diagonal, clearance_weight, clearance_decay_m, goal_tolerance_m}
+///   frontier:    {min_cluster_cells, min_goal_distance_m, blacklist_radius_m}
+///   simulation:  PartialSimSettings' fields (iterations, particles, phi_a, phi_b, stages, ...)
+///   eps_r_bits, use_simulation
+///   dwa:         DwaSettings' fields except robot_radius_m, plus the ChassisLimits fields
+///                {max_v_mps, min_v_mps, max_omega_rps, max_accel_mps2, max_alpha_rps2}
+///                (max_v_mps and max_omega_rps must not exceed the chassis' maxima)
+/// The sensors' fans come from `sensors` (observation_sectors()).
+struct ExplorationProfile {
+  int rays_per_sensor = 30;      ///< rays per sensor fan (the issue's benchmark case: 30)
+  CellThresholds cells;          ///< free / unknown / occupied classification of the grid
+  ObservationSettings observation;
+  InflationSettings inflation;
+  PathSettings path;
+  ExplorationSettings strategy;  ///< simulation + frontier + eps_r_bits + use_simulation
+  DwaSettings dwa;
+};
+
 struct Profile {
   std::string name;                    ///< non-empty (required)
   std::string description;             ///< free text (optional)
   ChassisProfile chassis;              ///< (required)
   std::vector<SensorProfile> sensors;  ///< 1 to 16 sensors (required)
   MappingSettings mapping;             ///< (optional)
+  ExplorationProfile exploration;      ///< (optional)
 };
+
+/// The observation model's fan of each sensor (paper §3.1): origin (x, y) and yaw from the
+/// extrinsics (Eq. (6)), the horizontal field of view, the depth range, rays_per_sensor rays.
+[[nodiscard]] std::vector<SensorSector> observation_sectors(const Profile& profile);
 
 /// Reads and validates a profile file.
 [[nodiscard]] Profile load_profile(const std::filesystem::path& path);
