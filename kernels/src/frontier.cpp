@@ -22,6 +22,7 @@
 #include <limits>
 #include <numbers>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace duet {
@@ -426,6 +427,150 @@ void compact(const std::vector<std::uint8_t>& mask, int w, int h, FrontierWorksp
   });
 }
 
+
+// ---- exact two-queue Dijkstra in fixed-point path length ------------------------------------------
+//
+// Costs are integers in units of res / 2^16: an orthogonal step is 65536, a diagonal one
+// round(sqrt(2) * 65536) = 92682 (relative error 2e-6, far below the float rounding of a sum of
+// metres). Integer sums are exact, so the two FIFO queues (one per step length) each receive
+// strictly non-decreasing keys and merging their heads is exact. The search runs on uint32 costs
+// (max ~ 65535 cells of path length) and reruns on uint64 costs if a popped cost comes near the
+// uint32 limit (same unit, so the same result).
+// Per popped interior cell: branch-free relaxations (a non-traversable cell holds cost 0, so it
+// never improves; a diagonal is gated by its two orthogonal cells), a branch-free queue push
+// (the entry is always written, the tail advances only on improvement) and a branch-free merge
+// (each ring holds a sentinel key = max at its tail).
+
+constexpr std::uint32_t kUnitOrth = 65536;
+constexpr std::uint32_t kUnitDiag = 92682;  // round(sqrt(2) * 65536)
+
+template <class C>
+using QEntry = std::conditional_t<sizeof(C) == 4, FrontierWorkspace::Entry32, FrontierWorkspace::Entry64>;
+
+template <class C>
+struct Ring {
+  std::vector<QEntry<C>>& buf;
+  std::size_t mask = 0, head = 0, tail = 0;
+  explicit Ring(std::vector<QEntry<C>>& b) : buf(b) {
+    if (buf.size() < 1024 || (buf.size() & (buf.size() - 1)) != 0) buf.resize(1024);
+    mask = buf.size() - 1;
+    buf[0].d = std::numeric_limits<C>::max();
+  }
+  void reserve_for(std::size_t extra) {  // room for `extra` pushes plus the sentinel
+    if (tail - head + extra + 1 <= buf.size()) return;
+    std::vector<QEntry<C>> nb(buf.size() * 2);
+    const std::size_t nm = nb.size() - 1;
+    for (std::size_t k = head; k != tail; ++k) nb[k & nm] = buf[k & mask];
+    buf.swap(nb);
+    mask = nm;
+  }
+  void seal() { buf[tail & mask].d = std::numeric_limits<C>::max(); }
+};
+
+/// Initialises the per-cell search arrays of rows [y0, y1): flags, cost (traversable: max = not
+/// reached; blocked: 0 = never improves).
+template <class C>
+void init_rows(const InflatedGrid& g, const std::uint8_t* mask, std::uint8_t* flags, C* cost, float* dist, std::size_t y,
+               bool with_flags) {
+  const std::size_t w = static_cast<std::size_t>(g.width), row = y * w;
+  const std::uint8_t* t = g.traversable.data() + row;
+  C* co = cost + row;
+  for (std::size_t x = 0; x < w; ++x) co[x] = static_cast<C>(C{0} - static_cast<C>(t[x]));
+  float* di = dist + row;
+  std::fill(di, di + w, std::numeric_limits<float>::infinity());
+  if (!with_flags) return;
+  const std::uint8_t* m = mask + row;
+  std::uint8_t* f = flags + row;
+  for (std::size_t x = 0; x < w; ++x) f[x] = static_cast<std::uint8_t>(t[x] | (m[x] << 1));
+  if (y == 0 || y + 1 == static_cast<std::size_t>(g.height)) {
+    for (std::size_t x = 0; x < w; ++x) f[x] |= 4;
+  } else {
+    f[0] |= 4;
+    f[w - 1] |= 4;
+  }
+}
+
+/// Dijkstra from start over the traversable cells; on_settle(cell, cost, flags) is called for each
+/// settled frontier cell (flags bit 1) in settling order. Returns false on uint32 overflow.
+template <class C, class OnFrontier>
+bool dijkstra(const InflatedGrid& g, FrontierWorkspace& ws, C* cost, std::vector<QEntry<C>>& bo, std::vector<QEntry<C>>& bd,
+              std::uint32_t start, OnFrontier&& on_frontier, std::size_t& reached) {
+  constexpr C kMax = std::numeric_limits<C>::max();
+  constexpr C Ko = kUnitOrth, Kd = kUnitDiag;
+  constexpr C kLimit = kMax - 2 * Kd;  // a popped cost above this may overflow when relaxed
+  const std::uint8_t* fl = ws.flags.data();
+  std::uint8_t* dir = ws.dir.data();
+  float* dist = ws.dist.data();
+  const double scale = static_cast<double>(g.resolution_m) / kUnitOrth;
+  const std::ptrdiff_t w = g.width;
+  const std::size_t uw = static_cast<std::size_t>(w);
+  Ring<C> qo(bo), qd(bd);
+  cost[start] = 0;
+  dir[start] = 255;
+  qo.buf[0] = {0, start};
+  qo.tail = 1;
+  qo.seal();
+  qd.seal();
+  reached = 0;
+  const auto relax = [&](Ring<C>& q, std::size_t ni, C v, std::uint8_t dv, bool ok) {
+    const C old = cost[ni];
+    const bool upd = ok & (v < old);
+    cost[ni] = upd ? v : old;
+    dir[ni] = upd ? dv : dir[ni];
+    q.buf[q.tail & q.mask] = {v, static_cast<std::uint32_t>(ni)};
+    q.tail += upd;
+  };
+  for (;;) {
+    qo.reserve_for(4);
+    qd.reserve_for(4);
+    const QEntry<C> eo = qo.buf[qo.head & qo.mask], ed = qd.buf[qd.head & qd.mask];
+    const bool take_o = eo.d <= ed.d;  // ties: the orthogonal queue first
+    const C d = take_o ? eo.d : ed.d;
+    const std::uint32_t c = take_o ? eo.cell : ed.cell;
+    if (d == kMax) break;  // both rings hold only their sentinel
+    qo.head += take_o;
+    qd.head += !take_o;
+    if (d != cost[c]) continue;  // stale: the cell was settled with a smaller cost
+    if constexpr (sizeof(C) < 8) {
+      if (d > kLimit) return false;
+    }
+    ++reached;
+    dist[c] = static_cast<float>(static_cast<double>(d) * scale);
+    const std::uint8_t f = fl[c];
+    if (f & 2) on_frontier(c, d, f);
+    const C vo = d + Ko, vd = d + Kd;
+    const std::size_t cs = c;
+    if (!(f & 4)) {  // interior: all eight neighbours exist
+      const bool te = fl[cs + 1] & 1, tw = fl[cs - 1] & 1, tn = fl[cs + uw] & 1, ts = fl[cs - uw] & 1;
+      relax(qo, cs + 1, vo, 0, true);
+      relax(qo, cs - 1, vo, 1, true);
+      relax(qo, cs + uw, vo, 2, true);
+      relax(qo, cs - uw, vo, 3, true);
+      relax(qd, cs + uw + 1, vd, 4, tn & te);
+      relax(qd, cs + uw - 1, vd, 5, tn & tw);
+      relax(qd, cs - uw + 1, vd, 6, ts & te);
+      relax(qd, cs - uw - 1, vd, 7, ts & tw);
+    } else {  // grid border: bounds checks
+      const int x = static_cast<int>(cs % uw), y = static_cast<int>(cs / uw);
+      for (int k = 0; k < 8; ++k) {
+        const int nx = x + kDx[k], ny = y + kDy[k];
+        if (!g.in_bounds(nx, ny)) continue;
+        const std::size_t ni = g.index(nx, ny);
+        if (k < 4) {
+          relax(qo, ni, vo, static_cast<std::uint8_t>(k), true);
+        } else {
+          const bool ok = (fl[g.index(nx, y)] & 1) && (fl[g.index(x, ny)] & 1);  // no corner cutting
+          relax(qd, ni, vd, static_cast<std::uint8_t>(k), ok);
+        }
+      }
+    }
+    qo.seal();
+    qd.seal();
+  }
+  (void)w;
+  return true;
+}
+
 }  // namespace
 
 FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot_xy, const GoalBlacklist& bl,
@@ -520,116 +665,58 @@ FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot
     return res;
   }
 
-  // 4. Bucketed Dijkstra on path length (two FIFO queues, each filled in non-decreasing order).
-  constexpr float kInf = std::numeric_limits<float>::infinity();
+  // 4. Exact two-queue Dijkstra on path length (see dijkstra() above), over the robot's whole
+  // traversable component. Per-cell arrays (flags: bit 0 traversable, bit 1 frontier cell of a
+  // kept cluster, bit 2 on the grid border; cost; dist) are initialised in one parallel pass.
   ws.dist.resize(n);
   ws.dir.resize(n);
-  detail::for_blocks(n, std::size_t{1} << 16, [&](std::size_t, std::size_t b, std::size_t e) {
-    std::fill(ws.dist.begin() + static_cast<std::ptrdiff_t>(b), ws.dist.begin() + static_cast<std::ptrdiff_t>(e), kInf);
-  });
-  ws.cand.assign(res.clusters.size(), 0);
-  auto& qo = ws.q_orth;
-  auto& qd = ws.q_diag;
-  qo.clear();
-  qd.clear();
-  std::size_t ho = 0, hd = 0;
-  const float step_o = g.resolution_m;
-  const float step_d = static_cast<float>(std::numbers::sqrt2 * g.resolution_m);
-  const auto st = static_cast<std::uint32_t>(start);
-  ws.dist[st] = 0.0f;
-  ws.dir[st] = 255;
-  qo.push_back({0.0f, st});
-  // Per-cell flags for the search loop (one byte read per cell, no division): bit 0 traversable,
-  // bit 1 frontier cell of a kept cluster, bit 2 on the grid border.
   ws.flags.resize(n);
+  ws.cost32.resize(n);
   detail::for_each_index(static_cast<std::size_t>(h), 16, [&](std::size_t y) {
-    const std::size_t row = y * static_cast<std::size_t>(w);
-    const bool border_row = y == 0 || y + 1 == static_cast<std::size_t>(h);
-    for (std::size_t x = 0; x < static_cast<std::size_t>(w); ++x) {
-      const bool border = border_row || x == 0 || x + 1 == static_cast<std::size_t>(w);
-      ws.flags[row + x] = static_cast<std::uint8_t>(g.traversable[row + x] | (ws.mask[row + x] << 1) | (border << 2));
-    }
+    init_rows(g, ws.mask.data(), ws.flags.data(), ws.cost32.data(), ws.dist.data(), y, true);
   });
-  const std::uint8_t* fl = ws.flags.data();
-  const std::uint8_t* tr = g.traversable.data();
-  float* dist = ws.dist.data();
+  const std::vector<FrontierCluster> clusters0 = res.clusters;  // restored if the uint32 search overflows
+  const double min_units = (static_cast<double>(s.min_goal_distance_m) / g.resolution_m - 1e-3) * kUnitOrth;
   std::int64_t goal = -1;
   bool any_connected_reached = false;
-  // Tolerance of 1e-3 cell: float path lengths of exact multiples (10 x 0.05 m) must pass 0.5 m.
-  const float min_d = s.min_goal_distance_m - 1e-3f * g.resolution_m;
-  const std::ptrdiff_t sw = w;
-  const std::ptrdiff_t off[8] = {1, -1, sw, -sw, sw + 1, sw - 1, -sw + 1, -sw - 1};
-  while (ho < qo.size() || hd < qd.size()) {
-    FrontierWorkspace::QueueEntry e;
-    if (hd >= qd.size() || (ho < qo.size() && qo[ho].d <= qd[hd].d)) e = qo[ho++];
-    else e = qd[hd++];
-    const std::uint32_t c = e.cell;
-    if (e.d > dist[c]) continue;  // stale
-    ++res.reached_cells;
-    const std::uint8_t fc_flags = fl[c];
-    if (fc_flags & 2) {
+  const double scale = static_cast<double>(g.resolution_m) / kUnitOrth;
+  const auto run = [&]<class C>(C* cost, std::vector<QEntry<C>>& bo, std::vector<QEntry<C>>& bd) {
+    // Tolerance of 1e-3 cell below min_goal_distance_m (as the reference in metres).
+    const C min_cost = !(min_units > 0.0) ? C{0}
+                       : min_units >= static_cast<double>(std::numeric_limits<C>::max())
+                           ? std::numeric_limits<C>::max()
+                           : static_cast<C>(std::ceil(min_units));
+    ws.cand.assign(res.clusters.size(), 0);
+    goal = -1;
+    any_connected_reached = false;
+    const auto on_frontier = [&](std::uint32_t c, C d, std::uint8_t f) {
       const auto k = static_cast<std::size_t>(ws.label[c]);
       FrontierCluster& fc = res.clusters[k];
       if (!fc.reachable) {
         fc.reachable = true;
         fc.nearest_xy = g.cell_center(static_cast<std::size_t>(c));
-        fc.path_length_m = e.d;
+        fc.path_length_m = static_cast<float>(static_cast<double>(d) * scale);
       }
-      if (!(fc_flags & 4)) {  // connected (§3.2): all eight neighbours inside the grid
-        any_connected_reached = true;
-        if (e.d >= min_d) {
-          if (bl.blocks(g.cell_center(static_cast<std::size_t>(c)), s.blacklist_radius_m, now_s)) {
-            ws.cand[k] = std::max<std::uint8_t>(ws.cand[k], 1);
-          } else {
-            ws.cand[k] = 2;
-            if (goal < 0) goal = c;
-          }
-        }
-      }
-    }
-    const float dn_o = e.d + step_o, dn_d = e.d + step_d;
-    const auto relax_o = [&](std::size_t ni, int d) {
-      if (dn_o < dist[ni]) {
-        dist[ni] = dn_o;
-        ws.dir[ni] = static_cast<std::uint8_t>(d);
-        qo.push_back({dn_o, static_cast<std::uint32_t>(ni)});
-      }
-    };
-    const auto relax_d = [&](std::size_t ni, int d) {
-      if (dn_d < dist[ni]) {
-        dist[ni] = dn_d;
-        ws.dir[ni] = static_cast<std::uint8_t>(d);
-        qd.push_back({dn_d, static_cast<std::uint32_t>(ni)});
-      }
-    };
-    if (!(fc_flags & 4)) {
-      // Interior: the four orthogonal flags are loaded once and gate the diagonals (no corner cutting).
-      const std::size_t cs = c;
-      const std::size_t usw = static_cast<std::size_t>(sw);
-      const bool te = fl[cs + 1] & 1, tw = fl[cs - 1] & 1, tn = fl[cs + usw] & 1, ts = fl[cs - usw] & 1;
-      if (te) relax_o(cs + 1, 0);
-      if (tw) relax_o(cs - 1, 1);
-      if (tn) relax_o(cs + usw, 2);
-      if (ts) relax_o(cs - usw, 3);
-      if (tn && te && (fl[cs + usw + 1] & 1)) relax_d(cs + usw + 1, 4);
-      if (tn && tw && (fl[cs + usw - 1] & 1)) relax_d(cs + usw - 1, 5);
-      if (ts && te && (fl[cs - usw + 1] & 1)) relax_d(cs - usw + 1, 6);
-      if (ts && tw && (fl[cs - usw - 1] & 1)) relax_d(cs - usw - 1, 7);
-      continue;
-    }
-    const int x = static_cast<int>(c % uw), y = static_cast<int>(c / uw);
-    for (int d = 0; d < 8; ++d) {
-      const int nx = x + kDx[d], ny = y + kDy[d];
-      if (!g.in_bounds(nx, ny)) continue;
-      const std::size_t ni = g.index(nx, ny);
-      if (!tr[ni]) continue;
-      if (d >= 4) {  // no corner cutting
-        if (!tr[g.index(nx, y)] || !tr[g.index(x, ny)]) continue;
-        relax_d(ni, d);
+      if (f & 4) return;  // not connected (§3.2): on the grid border
+      any_connected_reached = true;
+      if (d < min_cost) return;
+      if (bl.blocks(g.cell_center(static_cast<std::size_t>(c)), s.blacklist_radius_m, now_s)) {
+        ws.cand[k] = std::max<std::uint8_t>(ws.cand[k], 1);
       } else {
-        relax_o(ni, d);
+        ws.cand[k] = 2;
+        if (goal < 0) goal = c;
       }
-    }
+    };
+    return dijkstra<C>(g, ws, cost, bo, bd, static_cast<std::uint32_t>(start), on_frontier, res.reached_cells);
+  };
+  if (!run(ws.cost32.data(), ws.ring32_o, ws.ring32_d)) {
+    // Path lengths beyond ~65535 cells: rerun with 64-bit costs (same unit, same result).
+    res.clusters = clusters0;
+    ws.cost64.resize(n);
+    detail::for_each_index(static_cast<std::size_t>(h), 16, [&](std::size_t y) {
+      init_rows(g, ws.mask.data(), ws.flags.data(), ws.cost64.data(), ws.dist.data(), y, false);
+    });
+    (void)run(ws.cost64.data(), ws.ring64_o, ws.ring64_d);
   }
   for (std::size_t k = 0; k < res.clusters.size(); ++k) res.clusters[k].blacklisted = ws.cand[k] == 1;
 
@@ -640,15 +727,20 @@ FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot
   res.status = FrontierStatus::kFound;
   const auto gl = static_cast<std::size_t>(goal);
   res.goal_xy = g.cell_center(gl);
-  res.path_length_m = dist[gl];
-  std::size_t c = gl;
+  const std::ptrdiff_t sw = w;
+  const std::ptrdiff_t off[8] = {1, -1, sw, -sw, sw + 1, sw - 1, -sw + 1, -sw - 1};
+  std::size_t c = gl, n_orth = 0, n_diag = 0;
   for (;;) {
     res.path.push_back(g.cell_center(c));
     const std::uint8_t d = ws.dir[c];
     if (d == 255) break;
+    ++(d < 4 ? n_orth : n_diag);
     c = static_cast<std::size_t>(static_cast<std::ptrdiff_t>(c) - off[d]);
   }
   std::reverse(res.path.begin(), res.path.end());
+  // Exact length of the step sequence (the fixed-point cost differs by < 1e-5 cell per step).
+  res.path_length_m = static_cast<float>((static_cast<double>(n_orth) + static_cast<double>(n_diag) * std::numbers::sqrt2) *
+                                         g.resolution_m);
   return res;
 }
 

@@ -358,6 +358,27 @@ struct ObservationModel::Impl {
   // ---- tracing ----
   /// DDA: the walk sums entropy and stops at the first occupied cell. The same arithmetic as
   /// walk_cells (detail::CellWalk), with the sum in registers and the hit time computed only once.
+  /// A known obstacle in a cell the ray leaves at or before t_min (the sensor's min range) blocks
+  /// the ray: the sensor measures nothing there (a Kinect returns no depth below 0.5 m). Returns
+  /// the entry distance of that cell [m], or -1 when the ray is not blocked.
+  [[nodiscard]] float blocked_before(const Eigen::Vector2f& o, const Eigen::Vector2f& d, float t_min) const noexcept {
+    if (!(t_min > 0.0f)) return -1.0f;
+    detail::CellWalk w;
+    if (!w.init(view, o, d, 0.0f, t_min)) return -1.0f;
+    const std::uint32_t* const cells = packed.data();
+    const unsigned width = static_cast<unsigned>(view.width), height = static_cast<unsigned>(view.height);
+    std::int64_t entered = -1;
+    for (;;) {
+      const std::int64_t tn = w.next();
+      if (tn > w.end) return -1.0f;  // this cell reaches beyond t_min: it is observed, not before
+      const bool inside = static_cast<unsigned>(w.ix) < width && static_cast<unsigned>(w.iy) < height;
+      if (inside && (cells[packed_index(static_cast<unsigned>(w.ix), static_cast<unsigned>(w.iy))] & kOccupiedBit))
+        return entered < 0 ? 0.0f : w.time(entered);
+      entered = tn;
+      w.step();
+    }
+  }
+
   [[nodiscard]] RayObservation observe_dda(const Eigen::Vector2f& o, const Eigen::Vector2f& d, float t0, float t1) const noexcept {
     RayObservation r{0.0f, t1, false, 0};
     detail::CellWalk w;
@@ -605,7 +626,8 @@ void ObservationModel::observe(std::span<const Pose2> poses, std::span<const Sen
       for (int r = 0; r < s.rays; ++r) {
         Eigen::Vector2f org, dir;
         fan_ray(pose, s, c, sn, r, org, dir);
-        o[r] = m.observe_dda(org, dir, s.min_range_m, s.max_range_m);
+        const float blocked = m.blocked_before(org, dir, s.min_range_m);
+        o[r] = blocked >= 0.0f ? RayObservation{0.0f, blocked, true, 0} : m.observe_dda(org, dir, s.min_range_m, s.max_range_m);
       }
       return;
     }
@@ -616,7 +638,11 @@ void ObservationModel::observe(std::span<const Pose2> poses, std::span<const Sen
       float range[8];
       std::int64_t cell[8];
       m.trace8(org, dir, count, s.min_range_m, s.max_range_m, range, cell);
-      for (int k = 0; k < count; ++k) o[r0 + k] = m.sum_to(org[k], dir[k], s.min_range_m, s.max_range_m, range[k], cell[k]);
+      for (int k = 0; k < count; ++k) {
+        const float blocked = m.blocked_before(org[k], dir[k], s.min_range_m);
+        o[r0 + k] = blocked >= 0.0f ? RayObservation{0.0f, blocked, true, 0}
+                                    : m.sum_to(org[k], dir[k], s.min_range_m, s.max_range_m, range[k], cell[k]);
+      }
     }
   });
 }

@@ -116,8 +116,21 @@ struct RefObs {
 };
 
 RefObs reference_observe(const GridView& g, const CellThresholds& th, const Eigen::Vector2f& o, const Eigen::Vector2f& d,
-                         float t0, float t1) {
+                         float t0, float t1, bool blocked_before_t0 = true) {
   auto value = [&](int ix, int iy) { return g.in_bounds(ix, iy) ? g.logodds[g.index(ix, iy)] : kNaN; };
+  // A known obstacle in a cell left at or before the min range t0 blocks the ray (every cell of
+  // the walk over [0, t0] but the last, which reaches t0 and is observed).
+  if (blocked_before_t0 && t0 > 0.0f) {
+    const RefWalk pre = reference_walk(g, o, d, 0.0f, t0);
+    for (std::size_t i = 0; i + 1 < pre.cells.size(); ++i)
+      if (classify(value(pre.cells[i].ix, pre.cells[i].iy), th) == CellState::kOccupied) {
+        RefObs r;
+        r.hit = true;
+        r.range = pre.cells[i].te;
+        r.corner_gap = pre.corner_gap;
+        return r;
+      }
+  }
   const RefWalk w = reference_walk(g, o, d, t0, t1,
                                    [&](int ix, int iy) { return classify(value(ix, iy), th) == CellState::kOccupied; });
   RefObs r;
@@ -586,7 +599,7 @@ TEST(ObservationModel, CastMatchesReference) {
       m.cast(o, d, t0, t1, out);
       int failures = 0, hits = 0;
       for (std::size_t i = 0; i < o.size(); ++i) {
-        const RefObs ref = reference_observe(g.view(), m.settings().thresholds, o[i], d[i], t0, t1);
+        const RefObs ref = reference_observe(g.view(), m.settings().thresholds, o[i], d[i], t0, t1, false);  // cast: [t0, t1] only
         if (ref.corner_gap < ambiguous_m(b, 6.0)) continue;
         hits += ref.hit;
         if ((out[i].hit != ref.hit || std::fabs(out[i].range_m - ref.range) > range_tol(b, d[i])) && ++failures <= 5)
@@ -835,5 +848,39 @@ TEST(ObservationModel, InvalidSettingsAndSizesThrow) {
   }
 }
 
+}  // namespace
+}  // namespace duet
+
+namespace duet {
+namespace {
+// A wall nearer than the min range (0.3 m ahead, min range 0.5 m): the sensor sees nothing, with
+// both backends; the wall 0.55 m ahead is seen.
+TEST(ObservationModel, ObstacleNearerThanMinRangeBlocksTheRay) {
+  TestGrid g(100, 100, 0.05f, Eigen::Vector2f(0.0f, 0.0f), kNaN);
+  for (int iy = 0; iy < 100; ++iy) g.at(56, iy) = kOcc;  // x in [2.80, 2.85)
+  SensorSector fwd;
+  fwd.rays = 5;
+  fwd.fov_rad = 0.2f;
+  for (const auto b : kBackends) {
+    ObservationModel m(settings_for(b, 16));
+    m.set_grid(g.view());
+    std::vector<RayObservation> out(5);
+    const Pose2 near_wall{2.5f, 2.5f, 0.0f};  // wall 0.3 m ahead
+    m.observe(std::span<const Pose2>(&near_wall, 1), std::span<const SensorSector>(&fwd, 1), out);
+    for (const auto& r : out) {
+      EXPECT_TRUE(r.hit);
+      EXPECT_EQ(r.cells, 0);
+      EXPECT_EQ(r.entropy_bits, 0.0f);
+      EXPECT_NEAR(r.range_m, 0.3f, 0.02f);
+    }
+    const Pose2 farther{2.25f, 2.5f, 0.0f};  // wall 0.55 m ahead: observed, cells from 0.5 m on
+    m.observe(std::span<const Pose2>(&farther, 1), std::span<const SensorSector>(&fwd, 1), out);
+    for (const auto& r : out) {
+      EXPECT_TRUE(r.hit);
+      EXPECT_GE(r.cells, 1);
+      EXPECT_NEAR(r.range_m, 0.55f, 0.01f);
+    }
+  }
+}
 }  // namespace
 }  // namespace duet

@@ -125,9 +125,24 @@ struct FrontierWorkspace {
     float d;             ///< tentative path length [m]
     std::uint32_t cell;
   };
-  std::vector<QueueEntry> q_orth, q_diag;  ///< the two FIFO queues (reached by an orthogonal / a diagonal step)
+  /// Unused since the search runs on integer costs (kept for source compatibility).
+  std::vector<QueueEntry> q_orth, q_diag;
   std::vector<std::uint8_t> flags;         ///< search flags: traversable | frontier << 1 | border << 2
   std::vector<std::uint8_t> cand;          ///< per kept cluster: 0 none, 1 some candidate blocked, 2 goal-able
+  /// Search cost of each cell in units of resolution_m / 65536 (orthogonal step 65536, diagonal
+  /// 92682); max = not reached, 0 for blocked cells. cost64 is used only for paths beyond ~65535 cells.
+  std::vector<std::uint32_t> cost32;
+  std::vector<std::uint64_t> cost64;
+  struct Entry32 {
+    std::uint32_t d;  ///< cost (see cost32)
+    std::uint32_t cell;
+  };
+  struct Entry64 {
+    std::uint64_t d;
+    std::uint32_t cell;
+  };
+  std::vector<Entry32> ring32_o, ring32_d;  ///< the two FIFO rings (orthogonal / diagonal step), power-of-2 size
+  std::vector<Entry64> ring64_o, ring64_d;
 };
 
 /// Global frontier search (paper §3.2, see the file comment). Throws duet::Error(kInvalidArgument)

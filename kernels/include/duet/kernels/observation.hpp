@@ -254,8 +254,11 @@ class ObservationModel {
   /// Every sensor's fan at every pose: out[(p * total_rays) + ray] with rays ordered sensor by
   /// sensor (total_rays = sum of sensors[s].rays), each over [min_range_m, max_range_m] of its
   /// sensor. Entropy summed along each ray up to its hit, the hit cell included (cells outside
-  /// the grid = unknown = 1 bit each). Validates the sensors, out.size() and that poses are
-  /// finite. TBB-parallel over poses x sensors; independent of the thread count.
+  /// the grid = unknown = 1 bit each). A known obstacle in a cell the ray leaves at or before
+  /// min_range_m blocks the ray: the sensor measures nothing (entropy 0, cells 0, hit, range_m =
+  /// the entry distance of that cell), as a Kinect returns no depth nearer than 0.5 m.
+  /// Validates the sensors, out.size() and that poses are finite. TBB-parallel over poses x
+  /// sensors; independent of the thread count.
   void observe(std::span<const Pose2> poses, std::span<const SensorSector> sensors,
                std::span<RayObservation> out) const;
   /// Sum over all rays of all sensors at `pose` of RayObservation::entropy_bits [bits] (the
