@@ -427,20 +427,13 @@ DwaResult dwa_step(const ClearanceView& clearance, const Pose2& pose, const Twis
     const float w = ws.omegas[static_cast<std::size_t>(j)];
     const float dth = w * dt;
     float c, dx, dy, rc, rs;
-    if (std::fabs(w) < kStraightOmega) {
-      c = dt;
-      dx = std::cos(pose.theta);
-      dy = std::sin(pose.theta);
-      rc = 1.0f;
-      rs = 0.0f;
-    } else {
-      c = 2.0f * std::sin(0.5f * dth) / w;
-      const float mid = pose.theta + 0.5f * dth;
-      dx = std::cos(mid);
-      dy = std::sin(mid);
-      rc = std::cos(dth);
-      rs = std::sin(dth);
-    }
+    // Eq. (4) in chord form (motion_step): continuous through w = 0.
+    c = dt * sinc(0.5f * dth);
+    const float mid = pose.theta + 0.5f * dth;
+    dx = std::cos(mid);
+    dy = std::sin(mid);
+    rc = std::cos(dth);
+    rs = std::sin(dth);
     float sx = 0.0f, sy = 0.0f;
     float* ox = ws.off_x.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(stride);
     float* oy = ws.off_y.data() + static_cast<std::size_t>(j) * static_cast<std::size_t>(stride);

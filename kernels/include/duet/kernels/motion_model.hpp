@@ -33,33 +33,27 @@ struct ChassisLimits {
 };
 void validate(const ChassisLimits& limits);
 
-/// Below this |omega| [rad/s] Eq. (4) is replaced by its omega -> 0 limit (straight line);
-/// at 1e-4 rad/s the two differ by less than 1e-9 m over 1 s at 1 m/s.
-inline constexpr float kStraightOmega = 1e-4f;
+/// sin(x) / x, by its series below |x| = 1e-3 (where the series' error is below float rounding).
+[[nodiscard]] inline float sinc(float x) noexcept {
+  return std::fabs(x) < 1e-3f ? 1.0f - x * x * (1.0f / 6.0f) : std::sin(x) / x;
+}
 
 /// Eq. (4): the pose after holding (v, omega) for dt seconds from `p`.
 ///   x' = x - v/w sin(theta) + v/w sin(theta + w dt)
 ///   y' = y + v/w cos(theta) - v/w cos(theta + w dt)
 ///   theta' = theta + w dt          (wrapped to (-pi, pi])
-/// and for |w| < kStraightOmega its limit x' = x + v dt cos(theta), y' = y + v dt sin(theta).
-/// The arc form is evaluated as 2 v/w sin(w dt / 2) along the mean heading, which is the same
-/// expression without the cancellation of two nearly equal sines.
+/// evaluated in the equivalent chord form: the displacement is v dt sinc(w dt / 2) along the mean
+/// heading theta + w dt / 2 (the same expression without the cancellation of two nearly equal
+/// sines). Its omega -> 0 limit is the straight line x' = x + v dt cos(theta),
+/// y' = y + v dt sin(theta), reached continuously (no threshold).
 [[nodiscard]] inline Pose2 motion_step(const Pose2& p, const Twist& u, float dt) noexcept {
-  const float dth = u.omega * dt;
-  float dx, dy;
-  if (std::fabs(u.omega) < kStraightOmega) {
-    dx = u.v * dt * std::cos(p.theta);
-    dy = u.v * dt * std::sin(p.theta);
-  } else {
-    const float chord = 2.0f * u.v / u.omega * std::sin(0.5f * dth);
-    const float mid = p.theta + 0.5f * dth;
-    dx = chord * std::cos(mid);
-    dy = chord * std::sin(mid);
-  }
-  float th = p.theta + dth;
+  const float half = 0.5f * u.omega * dt;
+  const float chord = u.v * dt * sinc(half);
+  const float mid = p.theta + half;
+  float th = p.theta + 2.0f * half;
   constexpr float kPi = 3.14159265358979f;
   th = std::remainder(th, 2.0f * kPi);  // (-pi, pi]
-  return {p.x + dx, p.y + dy, th};
+  return {p.x + chord * std::cos(mid), p.y + chord * std::sin(mid), th};
 }
 
 /// Clamp a command to the chassis limits (speed only; acceleration is the caller's window).
