@@ -18,6 +18,15 @@ namespace duet {
 
 namespace {
 
+// floor() to int without a libm call (baseline x86-64 has no roundss): the walks and rollouts
+// call it per jump and per sub-step. Clamped to +-1e9 first, so the conversion is defined for any
+// finite input (callers never pass NaN).
+inline int floor_int(float x) noexcept {
+  x = std::min(std::max(x, -1e9f), 1e9f);
+  const int i = static_cast<int>(x);
+  return i - (static_cast<float>(i) > x ? 1 : 0);
+}
+
 // Eq. (5) in bits for finite log-odds, by linear interpolation in a table over [-kTableL, kTableL]
 // (step 1/256; the interpolation error is below 2e-7 bits). Posteriors are clamped to the
 // settings' [min_logodds, max_logodds], which validate() keeps inside the table.
@@ -170,8 +179,8 @@ namespace {
 bool rollout(const InflatedGrid& g, const Pose2& x0, const PartialSimSettings& s, std::span<const Twist> u,
              std::span<Pose2> x) {
   const float res = g.resolution_m;
-  const int sx = static_cast<int>(std::floor((x0.x - g.origin.x()) / res));
-  const int sy = static_cast<int>(std::floor((x0.y - g.origin.y()) / res));
+  const int sx = floor_int((x0.x - g.origin.x()) / res);
+  const int sy = floor_int((x0.y - g.origin.y()) / res);
   Pose2 p = x0;
   for (std::size_t k = 0; k < u.size(); ++k) {
     const float travel = std::fabs(u[k].v) * s.stage_dt_s;
@@ -179,8 +188,8 @@ bool rollout(const InflatedGrid& g, const Pose2& x0, const PartialSimSettings& s
     const float dt = s.stage_dt_s / static_cast<float>(sub);
     for (int q = 0; q < sub; ++q) {
       p = motion_step(p, u[k], dt);
-      const int ix = static_cast<int>(std::floor((p.x - g.origin.x()) / res));
-      const int iy = static_cast<int>(std::floor((p.y - g.origin.y()) / res));
+      const int ix = floor_int((p.x - g.origin.x()) / res);
+      const int iy = floor_int((p.y - g.origin.y()) / res);
       if (ix == sx && iy == sy) continue;
       if (ix < 0 || iy < 0 || ix >= g.width || iy >= g.height) return false;
       if (!g.traversable[static_cast<std::size_t>(iy) * static_cast<std::size_t>(g.width) + static_cast<std::size_t>(ix)])
@@ -299,6 +308,25 @@ class RayWalker {
         observing_ = false;
         return;
       }
+      if (inside) {  // tight loop over the following skip cells (most of the walk in known space)
+        const std::ptrdiff_t step_y = sy_ * static_cast<std::ptrdiff_t>(w_);
+        auto i = static_cast<std::ptrdiff_t>(idx);
+        for (;;) {
+          if (!(std::min(tmx_, tmy_) < max_range_)) {
+            done_ = true;
+            return;
+          }
+          const bool xs = tmx_ < tmy_;
+          t_now_ = xs ? tmx_ : tmy_;
+          ix_ += xs ? sx_ : 0;
+          iy_ += xs ? 0 : sy_;
+          i += xs ? sx_ : step_y;
+          tmx_ += xs ? tdx_ : 0.0f;
+          tmy_ += xs ? 0.0f : tdy_;
+          if (static_cast<unsigned>(ix_) >= w_ || static_cast<unsigned>(iy_) >= h_) return;
+          if (codes_[i] != kSkipCode) return;  // the next advance() handles this cell
+        }
+      }
     } else if (observing_) {
       const std::uint32_t kind = code - 1;
       out_[n_++] = make_cell(inside ? static_cast<std::uint32_t>(idx) : kOutside, kind,
@@ -327,8 +355,8 @@ class RayWalker {
   static constexpr float kInf = std::numeric_limits<float>::infinity();
   void start_at(float t) {  // (re)starts the DDA at distance t along the ray
     const float qx = px_ + t * ux_, qy = py_ + t * uy_;
-    ix_ = static_cast<int>(std::floor(qx));
-    iy_ = static_cast<int>(std::floor(qy));
+    ix_ = floor_int(qx);
+    iy_ = floor_int(qy);
     tmx_ = dx_ > 0.0f ? t + (static_cast<float>(ix_ + 1) - qx) * tdx_ : dx_ < 0.0f ? t + (qx - static_cast<float>(ix_)) * tdx_ : kInf;
     tmy_ = dy_ > 0.0f ? t + (static_cast<float>(iy_ + 1) - qy) * tdy_ : dy_ < 0.0f ? t + (qy - static_cast<float>(iy_)) * tdy_ : kInf;
     t_now_ = t;
@@ -435,7 +463,7 @@ void observe_particle(const ObservationModel& model, std::span<const SensorSecto
         const std::uint32_t end = ts.ray_end[ray];
         // z ~ chi (line 13): the number of unknown cells passed before a sampled hit is geometric.
         const float u = 1.0f - rng.uniform01();  // (0, 1]
-        float g = std::floor(std::log(u) * inv_log_q);
+        const float g = std::log(u) * inv_log_q;  // >= 0: truncation is the floor
         std::int64_t unknown_left = g < 1e9f ? static_cast<std::int64_t>(g) : std::numeric_limits<std::int64_t>::max();
         for (std::uint32_t c = begin; c < end; ++c) {
           const RayCell cell = ts.cells[c];
