@@ -447,40 +447,18 @@ constexpr std::uint32_t kUnitDiag = 92682;  // round(sqrt(2) * 65536)
 template <class C>
 using QEntry = std::conditional_t<sizeof(C) == 4, FrontierWorkspace::Entry32, FrontierWorkspace::Entry64>;
 
+/// Initialises the per-cell search arrays of row y: cost (traversable: max = not reached;
+/// blocked: 0 = never improves) and flags (bit 0 traversable, bit 1 frontier cell of a kept
+/// cluster, bit 2 on the grid border).
 template <class C>
-struct Ring {
-  std::vector<QEntry<C>>& buf;
-  std::size_t mask = 0, head = 0, tail = 0;
-  explicit Ring(std::vector<QEntry<C>>& b) : buf(b) {
-    if (buf.size() < 1024 || (buf.size() & (buf.size() - 1)) != 0) buf.resize(1024);
-    mask = buf.size() - 1;
-    buf[0].d = std::numeric_limits<C>::max();
-  }
-  void reserve_for(std::size_t extra) {  // room for `extra` pushes plus the sentinel
-    if (tail - head + extra + 1 <= buf.size()) return;
-    std::vector<QEntry<C>> nb(buf.size() * 2);
-    const std::size_t nm = nb.size() - 1;
-    for (std::size_t k = head; k != tail; ++k) nb[k & nm] = buf[k & mask];
-    buf.swap(nb);
-    mask = nm;
-  }
-  void seal() { buf[tail & mask].d = std::numeric_limits<C>::max(); }
-};
-
-/// Initialises the per-cell search arrays of rows [y0, y1): flags, cost (traversable: max = not
-/// reached; blocked: 0 = never improves).
-template <class C>
-void init_rows(const InflatedGrid& g, const std::uint8_t* mask, std::uint8_t* flags, C* cost, float* dist, std::size_t y,
-               bool with_flags) {
+void init_rows(const InflatedGrid& g, const std::uint8_t* mask, std::uint8_t* flags, C* cost, std::size_t y, bool with_flags) {
   const std::size_t w = static_cast<std::size_t>(g.width), row = y * w;
   const std::uint8_t* t = g.traversable.data() + row;
   C* co = cost + row;
   for (std::size_t x = 0; x < w; ++x) co[x] = static_cast<C>(C{0} - static_cast<C>(t[x]));
-  float* di = dist + row;
-  std::fill(di, di + w, std::numeric_limits<float>::infinity());
   if (!with_flags) return;
-  const std::uint8_t* m = mask + row;
   std::uint8_t* f = flags + row;
+  const std::uint8_t* m = mask + row;
   for (std::size_t x = 0; x < w; ++x) f[x] = static_cast<std::uint8_t>(t[x] | (m[x] << 1));
   if (y == 0 || y + 1 == static_cast<std::size_t>(g.height)) {
     for (std::size_t x = 0; x < w; ++x) f[x] |= 4;
@@ -490,66 +468,83 @@ void init_rows(const InflatedGrid& g, const std::uint8_t* mask, std::uint8_t* fl
   }
 }
 
-/// Dijkstra from start over the traversable cells; on_settle(cell, cost, flags) is called for each
-/// settled frontier cell (flags bit 1) in settling order. Returns false on uint32 overflow.
+/// Dijkstra from start over the traversable cells (fl: flags); on_frontier(cell, cost, flags) is
+/// called for each settled frontier cell (flags bit 1) in settling order. Returns false on uint32
+/// overflow. No parent pointers: costs are exact integers, so the path is traced back afterwards
+/// from the costs alone (trace_back). Everything the loop needs lives in locals.
 template <class C, class OnFrontier>
-bool dijkstra(const InflatedGrid& g, FrontierWorkspace& ws, C* cost, std::vector<QEntry<C>>& bo, std::vector<QEntry<C>>& bd,
-              std::uint32_t start, OnFrontier&& on_frontier, std::size_t& reached) {
+bool dijkstra(const InflatedGrid& g, const std::uint8_t* fl, C* cost, std::vector<QEntry<C>>& bo, std::vector<QEntry<C>>& bd,
+              std::uint32_t start, OnFrontier&& on_frontier, std::size_t& reached_out) {
+  using E = QEntry<C>;
   constexpr C kMax = std::numeric_limits<C>::max();
   constexpr C Ko = kUnitOrth, Kd = kUnitDiag;
   constexpr C kLimit = kMax - 2 * Kd;  // a popped cost above this may overflow when relaxed
-  const std::uint8_t* fl = ws.flags.data();
-  std::uint8_t* dir = ws.dir.data();
-  float* dist = ws.dist.data();
-  const double scale = static_cast<double>(g.resolution_m) / kUnitOrth;
-  const std::ptrdiff_t w = g.width;
-  const std::size_t uw = static_cast<std::size_t>(w);
-  Ring<C> qo(bo), qd(bd);
-  cost[start] = 0;
-  dir[start] = 255;
-  qo.buf[0] = {0, start};
-  qo.tail = 1;
-  qo.seal();
-  qd.seal();
-  reached = 0;
-  const auto relax = [&](Ring<C>& q, std::size_t ni, C v, std::uint8_t dv, bool ok) {
-    const C old = cost[ni];
-    const bool upd = ok & (v < old);
-    cost[ni] = upd ? v : old;
-    dir[ni] = upd ? dv : dir[ni];
-    q.buf[q.tail & q.mask] = {v, static_cast<std::uint32_t>(ni)};
-    q.tail += upd;
+  const std::size_t uw = static_cast<std::size_t>(g.width);
+  if (bo.size() < 1024) bo.resize(1024);
+  if (bd.size() < 1024) bd.resize(1024);
+  E* po = bo.data();
+  E* pd = bd.data();
+  std::size_t mo = bo.size() - 1, md = bd.size() - 1;  // sizes are powers of 2
+  std::size_t ho = 0, to = 1, hd = 0, td = 0;
+  const auto grow = [](std::vector<E>& b, E*& p, std::size_t& m, std::size_t head, std::size_t tail) {
+    std::vector<E> nb(b.size() * 2);
+    const std::size_t nm = nb.size() - 1;
+    for (std::size_t k = head; k != tail; ++k) nb[k & nm] = b[k & m];
+    b.swap(nb);
+    p = b.data();
+    m = nm;
   };
+  cost[start] = 0;
+  po[0] = E{0, start};
+  po[1].d = kMax;  // sentinels
+  pd[0].d = kMax;
+  std::size_t reached = 0;
+  // Branch-free relaxation of neighbour ni with cost v through direction dv (ok: step allowed).
+#define DUET_RELAX(ni, v, ok, P, M, T)                                               \
+  do {                                                                               \
+    const std::size_t n_ = (ni);                                                     \
+    const C old_ = cost[n_];                                                         \
+    const bool u_ = (ok) & ((v) < old_);                                             \
+    cost[n_] = u_ ? (v) : old_;                                                      \
+    P[T & M] = E{(v), static_cast<std::uint32_t>(n_)};                               \
+    T += u_;                                                                         \
+  } while (0)
   for (;;) {
-    qo.reserve_for(4);
-    qd.reserve_for(4);
-    const QEntry<C> eo = qo.buf[qo.head & qo.mask], ed = qd.buf[qd.head & qd.mask];
-    const bool take_o = eo.d <= ed.d;  // ties: the orthogonal queue first
-    const C d = take_o ? eo.d : ed.d;
-    const std::uint32_t c = take_o ? eo.cell : ed.cell;
+    if (to - ho + 6 > mo) [[unlikely]] {
+      grow(bo, po, mo, ho, to);
+      po[to & mo].d = kMax;
+    }
+    if (td - hd + 6 > md) [[unlikely]] {
+      grow(bd, pd, md, hd, td);
+      pd[td & md].d = kMax;
+    }
+    const E eo = po[ho & mo], ed = pd[hd & md];
+    const bool take_o = eo.d <= ed.d;  // ties: the orthogonal ring first
+    // Branch-free select (the comparison is unpredictable).
+    const C d = ed.d ^ ((eo.d ^ ed.d) & (C{0} - static_cast<C>(take_o)));
+    const std::uint32_t c = ed.cell ^ ((eo.cell ^ ed.cell) & (0u - static_cast<std::uint32_t>(take_o)));
     if (d == kMax) break;  // both rings hold only their sentinel
-    qo.head += take_o;
-    qd.head += !take_o;
+    ho += take_o;
+    hd += !take_o;
     if (d != cost[c]) continue;  // stale: the cell was settled with a smaller cost
     if constexpr (sizeof(C) < 8) {
-      if (d > kLimit) return false;
+      if (d > kLimit) [[unlikely]] return false;
     }
     ++reached;
-    dist[c] = static_cast<float>(static_cast<double>(d) * scale);
     const std::uint8_t f = fl[c];
-    if (f & 2) on_frontier(c, d, f);
+    if (f & 2) [[unlikely]] on_frontier(c, d, f);
     const C vo = d + Ko, vd = d + Kd;
     const std::size_t cs = c;
-    if (!(f & 4)) {  // interior: all eight neighbours exist
+    if (!(f & 4)) [[likely]] {  // interior: all eight neighbours exist
       const bool te = fl[cs + 1] & 1, tw = fl[cs - 1] & 1, tn = fl[cs + uw] & 1, ts = fl[cs - uw] & 1;
-      relax(qo, cs + 1, vo, 0, true);
-      relax(qo, cs - 1, vo, 1, true);
-      relax(qo, cs + uw, vo, 2, true);
-      relax(qo, cs - uw, vo, 3, true);
-      relax(qd, cs + uw + 1, vd, 4, tn & te);
-      relax(qd, cs + uw - 1, vd, 5, tn & tw);
-      relax(qd, cs - uw + 1, vd, 6, ts & te);
-      relax(qd, cs - uw - 1, vd, 7, ts & tw);
+      DUET_RELAX(cs + 1, vo, true, po, mo, to);
+      DUET_RELAX(cs - 1, vo, true, po, mo, to);
+      DUET_RELAX(cs + uw, vo, true, po, mo, to);
+      DUET_RELAX(cs - uw, vo, true, po, mo, to);
+      DUET_RELAX(cs + uw + 1, vd, tn & te, pd, md, td);
+      DUET_RELAX(cs + uw - 1, vd, tn & tw, pd, md, td);
+      DUET_RELAX(cs - uw + 1, vd, ts & te, pd, md, td);
+      DUET_RELAX(cs - uw - 1, vd, ts & tw, pd, md, td);
     } else {  // grid border: bounds checks
       const int x = static_cast<int>(cs % uw), y = static_cast<int>(cs / uw);
       for (int k = 0; k < 8; ++k) {
@@ -557,18 +552,47 @@ bool dijkstra(const InflatedGrid& g, FrontierWorkspace& ws, C* cost, std::vector
         if (!g.in_bounds(nx, ny)) continue;
         const std::size_t ni = g.index(nx, ny);
         if (k < 4) {
-          relax(qo, ni, vo, static_cast<std::uint8_t>(k), true);
+          DUET_RELAX(ni, vo, true, po, mo, to);
         } else {
           const bool ok = (fl[g.index(nx, y)] & 1) && (fl[g.index(x, ny)] & 1);  // no corner cutting
-          relax(qd, ni, vd, static_cast<std::uint8_t>(k), ok);
+          DUET_RELAX(ni, vd, ok, pd, md, td);
         }
       }
     }
-    qo.seal();
-    qd.seal();
+    po[to & mo].d = kMax;
+    pd[td & md].d = kMax;
   }
-  (void)w;
+#undef DUET_RELAX
+  reached_out = reached;
   return true;
+}
+
+/// Shortest path start -> c from the settled costs: each step goes to the first neighbour p (in
+/// the order of kDx/kDy) that is traversable, allowed (no corner cutting) and has cost[p] + step ==
+/// cost[c] exactly. Appends the cells from c back to the start; counts the step kinds.
+template <class C>
+void trace_back(const InflatedGrid& g, const C* cost, std::size_t start, std::size_t c, std::vector<std::size_t>& cells,
+                std::size_t& n_orth, std::size_t& n_diag) {
+  const std::uint8_t* tr = g.traversable.data();
+  cells.push_back(c);
+  while (c != start) {
+    const int x = static_cast<int>(c % static_cast<std::size_t>(g.width)), y = static_cast<int>(c / static_cast<std::size_t>(g.width));
+    std::size_t next = c;
+    for (int k = 0; k < 8; ++k) {
+      const int px = x - kDx[k], py = y - kDy[k];  // p -> c is a step in direction k
+      if (!g.in_bounds(px, py)) continue;
+      const std::size_t p = g.index(px, py);
+      if (!tr[p]) continue;
+      if (k >= 4 && (!tr[g.index(px, y)] || !tr[g.index(x, py)])) continue;
+      if (cost[p] + static_cast<C>(k < 4 ? kUnitOrth : kUnitDiag) != cost[c]) continue;
+      next = p;
+      ++(k < 4 ? n_orth : n_diag);
+      break;
+    }
+    if (next == c) fail(ErrorCode::kInternal, "find_frontier: broken search tree");  // cannot happen
+    c = next;
+    cells.push_back(c);
+  }
 }
 
 }  // namespace
@@ -669,11 +693,10 @@ FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot
   // traversable component. Per-cell arrays (flags: bit 0 traversable, bit 1 frontier cell of a
   // kept cluster, bit 2 on the grid border; cost; dist) are initialised in one parallel pass.
   ws.dist.resize(n);
-  ws.dir.resize(n);
   ws.flags.resize(n);
   ws.cost32.resize(n);
   detail::for_each_index(static_cast<std::size_t>(h), 16, [&](std::size_t y) {
-    init_rows(g, ws.mask.data(), ws.flags.data(), ws.cost32.data(), ws.dist.data(), y, true);
+    init_rows(g, ws.mask.data(), ws.flags.data(), ws.cost32.data(), y, true);
   });
   const std::vector<FrontierCluster> clusters0 = res.clusters;  // restored if the uint32 search overflows
   const double min_units = (static_cast<double>(s.min_goal_distance_m) / g.resolution_m - 1e-3) * kUnitOrth;
@@ -707,14 +730,25 @@ FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot
         if (goal < 0) goal = c;
       }
     };
-    return dijkstra<C>(g, ws, cost, bo, bd, static_cast<std::uint32_t>(start), on_frontier, res.reached_cells);
+    if (!dijkstra<C>(g, ws.flags.data(), cost, bo, bd, static_cast<std::uint32_t>(start), on_frontier, res.reached_cells))
+      return false;
+    // dist: path length of the settled cells, +inf elsewhere (parallel, after the search).
+    const std::uint8_t* fl = ws.flags.data();
+    float* dist = ws.dist.data();
+    detail::for_blocks(n, std::size_t{1} << 15, [&](std::size_t, std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i)
+        dist[i] = (fl[i] & 1) && cost[i] != std::numeric_limits<C>::max() ? static_cast<float>(static_cast<double>(cost[i]) * scale)
+                                                                          : std::numeric_limits<float>::infinity();
+    });
+    return true;
   };
-  if (!run(ws.cost32.data(), ws.ring32_o, ws.ring32_d)) {
+  const bool wide = !run(ws.cost32.data(), ws.ring32_o, ws.ring32_d);
+  if (wide) {
     // Path lengths beyond ~65535 cells: rerun with 64-bit costs (same unit, same result).
     res.clusters = clusters0;
     ws.cost64.resize(n);
     detail::for_each_index(static_cast<std::size_t>(h), 16, [&](std::size_t y) {
-      init_rows(g, ws.mask.data(), ws.flags.data(), ws.cost64.data(), ws.dist.data(), y, false);
+      init_rows(g, ws.mask.data(), ws.flags.data(), ws.cost64.data(), y, false);
     });
     (void)run(ws.cost64.data(), ws.ring64_o, ws.ring64_d);
   }
@@ -727,16 +761,12 @@ FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot
   res.status = FrontierStatus::kFound;
   const auto gl = static_cast<std::size_t>(goal);
   res.goal_xy = g.cell_center(gl);
-  const std::ptrdiff_t sw = w;
-  const std::ptrdiff_t off[8] = {1, -1, sw, -sw, sw + 1, sw - 1, -sw + 1, -sw - 1};
-  std::size_t c = gl, n_orth = 0, n_diag = 0;
-  for (;;) {
-    res.path.push_back(g.cell_center(c));
-    const std::uint8_t d = ws.dir[c];
-    if (d == 255) break;
-    ++(d < 4 ? n_orth : n_diag);
-    c = static_cast<std::size_t>(static_cast<std::ptrdiff_t>(c) - off[d]);
-  }
+  std::vector<std::size_t> cells;
+  std::size_t n_orth = 0, n_diag = 0;
+  if (wide) trace_back(g, ws.cost64.data(), static_cast<std::size_t>(start), gl, cells, n_orth, n_diag);
+  else trace_back(g, ws.cost32.data(), static_cast<std::size_t>(start), gl, cells, n_orth, n_diag);
+  res.path.reserve(cells.size());
+  for (const std::size_t c : cells) res.path.push_back(g.cell_center(c));
   std::reverse(res.path.begin(), res.path.end());
   // Exact length of the step sequence (the fixed-point cost differs by < 1e-5 cell per step).
   res.path_length_m = static_cast<float>((static_cast<double>(n_orth) + static_cast<double>(n_diag) * std::numbers::sqrt2) *

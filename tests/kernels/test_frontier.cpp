@@ -547,6 +547,29 @@ TEST(Frontier, ThreadCountIndependentAndWorkspaceReuse) {
   check_against_reference(g, g.cell_center(start), GoalBlacklist{}, 0.0, FrontierSettings{}, a);
 }
 
+// A serpentine corridor of ~80000 cells: path lengths beyond the 32-bit fixed-point range
+// (65535 cells), so the search reruns on 64-bit costs; the result must still match the reference.
+TEST(Frontier, VeryLongPathsUse64BitCosts) {
+  const int w = 400, h = 401;
+  TestGrid tg = blank(w, h, kOcc, 0.05f);
+  for (int y = 1; y <= h - 2; y += 2) tg.rect(1, y, w - 2, y, kFree);
+  for (int y = 2; y <= h - 3; y += 2) tg.set((y / 2) % 2 ? w - 2 : 1, y, kFree);
+  tg.rect(w / 2 - 1, h - 2, w / 2 + 1, h - 2, kNaN);  // unknown patch in the last corridor
+  InflationSettings is;
+  is.robot_radius_m = 0.0f;
+  InflatedGrid g;
+  inflate(tg.view(), is, g);
+  FrontierSettings s;
+  s.min_cluster_cells = 1;
+  FrontierWorkspace ws;
+  const Eigen::Vector2f robot = g.cell_center(1, 1);
+  const FrontierResult r = find_frontier(g, robot, GoalBlacklist{}, 0.0, s, ws);
+  ASSERT_EQ(r.status, FrontierStatus::kFound);
+  EXPECT_GT(r.path_length_m, 70000 * 0.05f);
+  EXPECT_EQ(r.clusters.size(), 2u);
+  check_against_reference(g, robot, GoalBlacklist{}, 0.0, s, r);
+}
+
 // ---- real data: the Willow Garage map ----------------------------------------------------------------
 
 constexpr const char* kWillow = "maps/willow-2010-02-18-0.10.pgm";

@@ -18,7 +18,11 @@
 ///    res, no corner cutting: the graph of plan_path with clearance_weight = 0) from the robot's
 ///    cell over the traversable cells of the InflatedGrid. Because there are only two step
 ///    lengths it runs as a "bucketed" Dijkstra with two FIFO queues (each receives cells in
-///    non-decreasing distance), O(1) per cell instead of a heap. A frontier cell is reached when it
+///    non-decreasing distance), O(1) per cell instead of a heap. Distances are integers in units
+///    of res / 65536 (orthogonal step 65536, diagonal round(sqrt(2) * 65536) = 92682, relative
+///    error 2e-6 per diagonal step), so sums and the merge of the two queues are exact (no float
+///    rounding decides the order); 64-bit costs take over for path lengths beyond ~65535 cells.
+///    Reported lengths are converted to metres (the goal's from its exact step counts). A frontier cell is reached when it
 ///    is traversable and reached by the search. The robot's cell follows plan_path's start rule
 ///    (traversable_start in path.hpp: nearest traversable cell within robot_radius_m).
 ///  - Goal: the reached, connected, non-blacklisted frontier cell of a kept cluster with the
@@ -120,7 +124,7 @@ struct FrontierWorkspace {
   std::vector<std::uint32_t> stack;        ///< flood-fill stack
   std::vector<std::int32_t> cluster_raw;   ///< raw cluster id -> kept cluster id or -1
   std::vector<float> dist;                 ///< path length [m] of settled cells (+inf = not reached)
-  std::vector<std::uint8_t> dir;           ///< direction to the parent of each reached cell
+  std::vector<std::uint8_t> dir;           ///< unused (the path is traced back from the exact integer costs); kept for source compatibility
   struct QueueEntry {
     float d;             ///< tentative path length [m]
     std::uint32_t cell;
