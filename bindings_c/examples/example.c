@@ -6,8 +6,11 @@
  * (y = -1.5). The program renders both depth images (uint16 millimetres) analytically,
  * back-projects them into one cloud in the robot frame, voxel-filters it, estimates normals,
  * segments floor / obstacles, integrates a 2D occupancy grid, and prints what it found.
- * Every call is checked; the program returns 0 only if everything worked and the map looks
- * like the room.
+ * Then it plans like the robot would (paper §3, Fig. 6): an exploration planner takes a copy
+ * of the grid, decides where to go next (partial map simulation, else frontier search), plans
+ * a global path there and computes the first dynamic-window command.
+ * Every call is checked; the program returns 0 only if everything worked, the map looks like
+ * the room and the planner found a goal, a path to it and a command.
  */
 #include <duet.h>
 
@@ -67,6 +70,13 @@ int main(void) {
   duet_device device = NULL;
   duet_cloud raw = NULL, filtered = NULL;
   duet_grid grid = NULL;
+  duet_planner planner = NULL;
+  duet_decision decision;
+  duet_path_result path;
+  duet_dwa_result command;
+  float* waypoints = NULL;
+  const duet_pose2 robot = {0.0f, 0.0f, 0.0f}; /* the robot's pose in the map (= robot) frame */
+  const duet_twist standing = {0.0f, 0.0f};
   uint16_t* depth[2] = {NULL, NULL};
   uint8_t* labels = NULL;
   float* cells = NULL;
@@ -209,10 +219,55 @@ int main(void) {
     fprintf(stderr, "example: the map does not look like the room\n");
     goto done;
   }
+
+  /* ---- exploration planner (Fig. 6) on a copy of the grid, then the global path and the
+   * first dynamic-window command ---- */
+  planner = duet_planner_new(device); /* default sensors: the paper's two Kinects, 30 rays each */
+  duet_planner_set_grid_from(planner, grid, NULL, NULL); /* default thresholds, radius 0.20 m */
+  if (failed(device, "duet_planner_set_grid_from")) goto done;
+  duet_planner_decide(planner, robot, 0.0, NULL, &decision);
+  if (failed(device, "duet_planner_decide")) goto done;
+  printf("decision: %s, goal (%.2f, %.2f, %.2f), reward %.2f bits\n",
+         duet_exploration_status_string(decision.status), (double)decision.goal.x,
+         (double)decision.goal.y, (double)decision.goal.theta, (double)decision.reward_bits);
+  if (decision.status != DUET_EXPLORATION_SIMULATED_GOAL &&
+      decision.status != DUET_EXPLORATION_FRONTIER_GOAL) {
+    fprintf(stderr, "example: the planner found no goal in a half-explored room\n");
+    goto done;
+  }
+  /* Path: ask for the count first (capacity 0), then fetch the waypoints. */
+  duet_planner_plan_path(planner, robot.x, robot.y, decision.goal.x, decision.goal.y, NULL, &path,
+                         NULL, 0);
+  if (failed(device, "duet_planner_plan_path")) goto done;
+  if (path.status != DUET_PATH_FOUND || path.waypoint_count == 0) {
+    fprintf(stderr, "example: no path to the goal (%s)\n", duet_path_status_string(path.status));
+    goto done;
+  }
+  waypoints = (float*)malloc(2 * sizeof(float) * path.waypoint_count);
+  if (waypoints == NULL) {
+    fprintf(stderr, "example: out of memory\n");
+    goto done;
+  }
+  duet_planner_plan_path(planner, robot.x, robot.y, decision.goal.x, decision.goal.y, NULL, &path,
+                         waypoints, path.waypoint_count);
+  if (failed(device, "duet_planner_plan_path")) goto done;
+  printf("path: %zu waypoints, %.2f m\n", path.waypoint_count, (double)path.length_m);
+  duet_planner_dwa_step(planner, robot, standing, waypoints, 0, path.waypoint_count, NULL, &command);
+  if (failed(device, "duet_planner_dwa_step")) goto done;
+  printf("command: %s, v %.3f m/s, omega %.3f rad/s\n", duet_dwa_status_string(command.status),
+         (double)command.cmd.v, (double)command.cmd.omega);
+  if (command.status != DUET_DWA_OK && command.status != DUET_DWA_ROTATE_IN_PLACE &&
+      command.status != DUET_DWA_GOAL_REACHED) {
+    fprintf(stderr, "example: no command toward the goal\n");
+    goto done;
+  }
+
   printf("ok\n");
   status = 0;
 
 done:
+  free(waypoints);
+  if (planner != NULL) duet_planner_release(planner);
   free(cells);
   free(labels);
   free(depth[0]);

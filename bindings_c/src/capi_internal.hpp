@@ -19,6 +19,14 @@
 #include <duet/kernels/segmentation.hpp>
 #include <duet/kernels/types.hpp>
 #include <duet/kernels/voxel_filter.hpp>
+// The exploration planner (planner.cpp, planner_settings.cpp).
+#include <duet/kernels/dwa.hpp>
+#include <duet/kernels/exploration.hpp>
+#include <duet/kernels/frontier.hpp>
+#include <duet/kernels/inflation.hpp>
+#include <duet/kernels/observation.hpp>
+#include <duet/kernels/partial_sim.hpp>
+#include <duet/kernels/path.hpp>
 
 #include <tbb/task_arena.h>
 
@@ -32,10 +40,11 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace duet::capi {
 
-enum class Kind : std::uint8_t { kDevice = 1, kCloud = 2, kGrid = 3 };
+enum class Kind : std::uint8_t { kDevice = 1, kCloud = 2, kGrid = 3, kPlanner = 4 };
 
 [[nodiscard]] const char* kind_name(Kind kind) noexcept;
 
@@ -82,10 +91,38 @@ struct Grid final : Object {
   GridUpdateWorkspace workspace;
 };
 
+/// The exploration and control kernels' state (duet.h, "Exploration planner"). Every call
+/// takes `mutex` exclusively: the workspaces, the DWA state and the blacklist are mutable.
+struct Planner final : Object {
+  explicit Planner(std::shared_ptr<Device> d)
+      : Object(Kind::kPlanner), device(std::move(d)), sensors(paper_dual_sensors(30)) {}
+  std::shared_ptr<Device> device;
+  std::mutex mutex;
+
+  bool has_grid = false;                    ///< model and inflated describe a valid grid
+  ObservationSettings observation_settings; ///< what `model` was built with
+  InflationSettings inflation_settings;     ///< what `inflated` was built with
+  ObservationModel model;                   ///< owns its copy of the log-odds
+  InflatedGrid inflated;
+  std::vector<SensorSector> sensors;
+  GoalBlacklist blacklist;
+  DwaState dwa_state;
+
+  // Workspaces (simulate and find_frontier use the exploration workspace's members).
+  ExplorationWorkspace exploration_ws;
+  PathWorkspace path_ws;
+  DwaWorkspace dwa_ws;
+  std::vector<float> staging;               ///< packed copy of strided caller rows
+  std::vector<Eigen::Vector2f> path_in;     ///< dwa_step's path, gathered
+  std::vector<Pose2> poses_in;              ///< observe's poses, converted
+  std::vector<RayObservation> rays_out;     ///< observe's results before conversion
+};
+
 template <class T> struct KindOf;
 template <> struct KindOf<Device> { static constexpr Kind value = Kind::kDevice; };
 template <> struct KindOf<Cloud> { static constexpr Kind value = Kind::kCloud; };
 template <> struct KindOf<Grid> { static constexpr Kind value = Kind::kGrid; };
+template <> struct KindOf<Planner> { static constexpr Kind value = Kind::kPlanner; };
 
 // ---- errors ------------------------------------------------------------------------------
 
@@ -212,5 +249,22 @@ NormalSettings to_cpp(const duet_normal_settings* s);
 ClusteringSettings to_cpp(const duet_clustering_settings* s);
 SegmentationSettings to_cpp(const duet_segmentation_settings* s);
 GridUpdateSettings to_cpp(const duet_grid_update_settings* s);
+
+// ---- planner settings (planner_settings.cpp); `name` prefixes the C-level field messages ----
+
+SensorSector to_cpp(const duet_sensor_sector& s);
+ObservationSettings to_cpp(const duet_observation_settings* s, const char* name = "settings");
+InflationSettings to_cpp(const duet_inflation_settings* s, const char* name = "settings");
+PathSettings to_cpp(const duet_path_settings* s, const char* name = "settings");
+FrontierSettings to_cpp(const duet_frontier_settings* s, const char* name = "settings");
+PartialSimSettings to_cpp(const duet_partial_sim_settings* s, const char* name = "settings");
+ExplorationSettings to_cpp(const duet_exploration_settings* s, const char* name = "settings");
+DwaSettings to_cpp(const duet_dwa_settings* s, const char* name = "settings");
+
+/// C mirrors of the kernel results (planner_settings.cpp).
+duet_sensor_sector to_c(const SensorSector& s);
+duet_pose2 to_c(const Pose2& p);
+duet_partial_sim_result to_c(const PartialSimResult& r);
+duet_frontier_result to_c(const FrontierResult& r);
 
 }  // namespace duet::capi

@@ -146,6 +146,7 @@ const char* kind_name(Kind kind) noexcept {
     case Kind::kDevice: return "duet_device";
     case Kind::kCloud: return "duet_cloud";
     case Kind::kGrid: return "duet_grid";
+    case Kind::kPlanner: return "duet_planner";
   }
   return "unknown handle";
 }
