@@ -101,10 +101,17 @@ std::string fmt_count(double v) {
   return buf;
 }
 
+enum class TargetKind {
+  kRatio,      // time(kernel/peer/size) / time(kernel/impl/size) >= value
+  kMaxTime,    // time(kernel/impl/size) <= value [ns]
+  kBandwidth,  // (bytes/time of kernel/impl/size) / (bytes/time of `peer`, a full benchmark id) >= value
+};
+
 struct Target {
   std::string kernel, impl, peer;
-  double min_ratio;
+  double value;
   std::string text;
+  TargetKind kind = TargetKind::kRatio;
 };
 
 const std::vector<Target> kTargets{
@@ -112,6 +119,17 @@ const std::vector<Target> kTargets{
     {"VoxelFilter", "duet", "pcl", 7.0, "voxel filter: duet (2 threads) >= 7x pcl::VoxelGrid"},
     {"Normals", "duet", "pcl", 3.0, "normals: duet (2 threads) >= 3x pcl::NormalEstimationOMP (2 threads)"},
     {"Clustering", "duet", "pcl", 10.0, "clustering: duet (2 threads) >= 10x pcl::EuclideanClusterExtraction"},
+    // Exploration kernels (issue 3).
+    {"Observation", "duet_dda_1t", "naive", 4.0,
+     "observation model (default DDA backend), 1 thread >= 4x the naive scalar DDA"},
+    {"Decision", "duet", "", 10e6, "one decision (Procedure 1 N 100 I 5 phi_i = i + 1 H 4, 2 x 30 rays, + frontier search) <= 10 ms on 2 threads",
+     TargetKind::kMaxTime},
+    {"Decision", "duet", "duet_1t", 1.8, "one decision: speed-up 1 -> 2 threads >= 1.8x"},
+    {"FrontierScan", "duet", "Memory/stream/128MiB", 0.5, "frontier full scan (2 threads) >= 0.5x the memory-streaming rate (2 threads)",
+     TargetKind::kBandwidth},
+    {"FrontierScan", "duet_1t", "Memory/stream_1t/128MiB", 0.5, "frontier full scan (1 thread) >= 0.5x the memory-streaming rate (1 thread)",
+     TargetKind::kBandwidth},
+    {"DWA", "duet_1t", "", 0.3e6, "dynamic window: 800 trajectories x 30 steps <= 0.3 ms on one core", TargetKind::kMaxTime},
 };
 
 }  // namespace
@@ -342,17 +360,35 @@ int main(int argc, char** argv) {
       continue;
     }
     for (const auto& size : sizes->second) {
-      const auto td = time_of(t.kernel + "/" + t.impl + "/" + size);
-      const auto tp = time_of(t.kernel + "/" + t.peer + "/" + size);
+      const std::string impl_id = t.kernel + "/" + t.impl + "/" + size;
+      const std::string peer_id = t.kind == TargetKind::kBandwidth ? t.peer : t.kernel + "/" + t.peer + "/" + size;
+      const auto td = time_of(impl_id);
+      const auto tp = t.kind == TargetKind::kMaxTime ? std::optional<double>(1.0) : time_of(peer_id);
       md << "| " << t.text << " | " << size << " | ";
       if (!td || !tp) {
-        md << "- | n/a (" << (!tp ? t.peer : t.impl) << " not run) |\n";
+        md << "- | n/a (" << (!tp ? peer_id : impl_id) << " not run) |\n";
         ++na;
         continue;
       }
-      const double r = *tp / *td;
-      const bool ok = r >= t.min_ratio;
-      md << fmt_ratio(r) << " | " << (ok ? "PASS" : "MISS") << " (>= " << fmt_ratio(t.min_ratio) << ") |\n";
+      bool ok = false;
+      if (t.kind == TargetKind::kMaxTime) {
+        ok = *td <= t.value;
+        md << fmt_time(*td) << " | " << (ok ? "PASS" : "MISS") << " (<= " << fmt_time(t.value) << ") |\n";
+      } else if (t.kind == TargetKind::kBandwidth) {
+        const auto bi = runs[impl_id].bytes, bp = runs[peer_id].bytes;
+        if (!bi || !bp) {
+          md << "- | n/a (no byte counts) |\n";
+          ++na;
+          continue;
+        }
+        const double r = (*bi / *td) / (*bp / *tp);
+        ok = r >= t.value;
+        md << fmt_ratio(r) << " | " << (ok ? "PASS" : "MISS") << " (>= " << fmt_ratio(t.value) << ") |\n";
+      } else {
+        const double r = *tp / *td;
+        ok = r >= t.value;
+        md << fmt_ratio(r) << " | " << (ok ? "PASS" : "MISS") << " (>= " << fmt_ratio(t.value) << ") |\n";
+      }
       (ok ? pass : miss)++;
     }
   }
