@@ -376,23 +376,48 @@ class RayWalker {
   bool done_ = true, observing_ = false;
 };
 
+// Each sensor's ray directions in the robot frame (the fan of sector_rays() at theta = 0); a
+// pose's rays are these rotated by its heading: one sin/cos per fan instead of one per ray.
+struct RobotFan {
+  std::vector<Eigen::Vector2f> dirs;
+};
+
+std::vector<RobotFan> robot_fans(std::span<const SensorSector> sensors) {
+  std::vector<RobotFan> fans(sensors.size());
+  for (std::size_t i = 0; i < sensors.size(); ++i) {
+    const SensorSector& s = sensors[i];
+    fans[i].dirs.resize(static_cast<std::size_t>(s.rays));
+    for (int r = 0; r < s.rays; ++r) {
+      const float a = s.rays > 1 ? s.yaw_rad - 0.5f * s.fov_rad + s.fov_rad * static_cast<float>(r) / static_cast<float>(s.rays - 1)
+                                 : s.yaw_rad;
+      fans[i].dirs[static_cast<std::size_t>(r)] = Eigen::Vector2f(std::cos(a), std::sin(a));
+    }
+  }
+  return fans;
+}
+
 void precompute_rays(const GridView& grid, std::span<const std::uint8_t> codes, const SkipBlocks& sb, std::span<const Pose2> x,
-                     std::span<const SensorSector> sensors, ThreadScratch& ts) {
+                     std::span<const SensorSector> sensors, std::span<const RobotFan> fans, ThreadScratch& ts) {
   ts.cells.clear();
   ts.ray_end.clear();
   RayWalker a(grid, codes, sb), b(grid, codes, sb);
   for (const Pose2& pose : x) {
-    for (const SensorSector& sec : sensors) {
+    const float c = std::cos(pose.theta), sn = std::sin(pose.theta);
+    for (std::size_t si = 0; si < sensors.size(); ++si) {
+      const SensorSector& sec = sensors[si];
       const auto nr = static_cast<std::size_t>(sec.rays);
-      ts.origins.resize(nr);
       ts.dirs.resize(nr);
-      sector_rays(pose, sec, ts.origins, ts.dirs);
+      const Eigen::Vector2f org(pose.x + c * sec.x_m - sn * sec.y_m, pose.y + sn * sec.x_m + c * sec.y_m);
+      for (std::size_t r = 0; r < nr; ++r) {
+        const Eigen::Vector2f& f = fans[si].dirs[r];
+        ts.dirs[r] = Eigen::Vector2f(c * f.x() - sn * f.y(), sn * f.x() + c * f.y());
+      }
       const std::size_t cap = RayWalker::max_cells(sec.max_range_m, grid.resolution_m);
       if (ts.pair_buffer.size() < 2 * cap) ts.pair_buffer.resize(2 * cap);
       for (std::size_t r = 0; r < nr; r += 2) {
         const bool two = r + 1 < nr;
-        a.start(ts.origins[r], ts.dirs[r], sec.min_range_m, sec.max_range_m, ts.pair_buffer.data());
-        if (two) b.start(ts.origins[r + 1], ts.dirs[r + 1], sec.min_range_m, sec.max_range_m, ts.pair_buffer.data() + cap);
+        a.start(org, ts.dirs[r], sec.min_range_m, sec.max_range_m, ts.pair_buffer.data());
+        if (two) b.start(org, ts.dirs[r + 1], sec.min_range_m, sec.max_range_m, ts.pair_buffer.data() + cap);
         while (!a.done() && two && !b.done()) {
           a.advance();
           b.advance();
@@ -529,6 +554,7 @@ PartialSimResult partial_map_simulation(const ObservationModel& model, const Inf
   auto& ws = workspace.impl();
   build_codes(model, s.min_logodds, ws.codes);
   build_skip_blocks(grid, ws.codes, ws.skip);
+  const std::vector<RobotFan> fans = robot_fans(sensors);
   const int N = s.particles, H = s.stages;
   const auto Nz = static_cast<std::size_t>(N), Hz = static_cast<std::size_t>(H);
   ws.particles.resize(Nz);
@@ -570,7 +596,7 @@ PartialSimResult partial_map_simulation(const ObservationModel& model, const Inf
           part.log_w = -std::numeric_limits<double>::infinity();
           continue;
         }
-        precompute_rays(grid, ws.codes, ws.skip, part.x, sensors, ts);
+        precompute_rays(grid, ws.codes, ws.skip, part.x, sensors, fans, ts);
         observe_particle(model, sensors, s, phi, rng, ts, part);  // lines 10-19
       }
     });
