@@ -2,7 +2,8 @@
 // of doubles, no heuristic): equal cost on randomised maze grids with fixed seeds; every path step
 // is between traversable 8-neighbours without corner cutting; length and cost recomputed from the
 // waypoints; statuses (outside grid, start blocked, goal blocked, no path), the start rule inside
-// the inflation, goal tolerance, 4-connectivity, invalid settings, workspace reuse, thread counts.
+// the inflation, goal tolerance, 4-connectivity, invalid settings, workspace reuse, thread counts,
+// the tie rule among equal-cost paths on an open grid.
 #include "kernel_test_util.hpp"
 
 #include <duet/kernels/error.hpp>
@@ -208,6 +209,88 @@ TEST(PathSearch, StraightCorridorAndSameCell) {
   EXPECT_EQ(same.length_m, 0.0f);
 }
 
+// Tie rule (header): smallest f, then smallest heuristic (= largest g), then smallest cell index.
+// On an open grid without clearance cost every path of min(|dx|,|dy|) diagonal and the remaining
+// straight steps is optimal; the rule makes the search take the step that lowers the octile distance
+// most first, i.e. all diagonal steps first, then the straight ones. 4-connected, the cells of
+// equal f and h are taken by smallest index (lower row first).
+TEST(PathSearch, TieRuleOnOpenGrid) {
+  TestGrid tg = blank(40, 30);
+  InflatedGrid g;
+  InflationSettings is;
+  is.robot_radius_m = 0.0f;
+  inflate(tg.view(), is, g);
+  PathWorkspace ws;
+  PathSettings s;
+  s.clearance_weight = 0.0f;
+  std::mt19937 rng(4242);
+  std::uniform_int_distribution<int> ux(0, 39), uy(0, 29);
+  for (int k = 0; k < 60; ++k) {
+    const Eigen::Vector2i a(ux(rng), uy(rng)), b(ux(rng), uy(rng));
+    const PathResult r = plan_path(g, g.cell_center(a.x(), a.y()), g.cell_center(b.x(), b.y()), s, ws);
+    ASSERT_EQ(r.status, PathStatus::kFound);
+    check_path(g, r, s);
+    // Expected: diagonal steps first, then straight.
+    std::vector<Eigen::Vector2f> expect;
+    Eigen::Vector2i c = a;
+    const int sx = b.x() > a.x() ? 1 : (b.x() < a.x() ? -1 : 0), sy = b.y() > a.y() ? 1 : (b.y() < a.y() ? -1 : 0);
+    expect.push_back(g.cell_center(c.x(), c.y()));
+    while (c != b) {
+      if (c.x() != b.x()) c.x() += sx;
+      if (c.y() != b.y()) c.y() += sy;
+      expect.push_back(g.cell_center(c.x(), c.y()));
+    }
+    SCOPED_TRACE(::testing::Message() << "from " << a.transpose() << " to " << b.transpose());
+    EXPECT_EQ(r.waypoints, expect);
+  }
+  // 4-connected, (2,2) -> (4,4): (3,2) and (2,3) tie on f and h: the smaller index (3,2) wins, and
+  // so on: x first, then y.
+  s.allow_diagonal = false;
+  const PathResult r4 = plan_path(g, g.cell_center(2, 2), g.cell_center(4, 4), s, ws);
+  const std::vector<Eigen::Vector2f> e4 = {g.cell_center(2, 2), g.cell_center(3, 2), g.cell_center(4, 2), g.cell_center(4, 3),
+                                           g.cell_center(4, 4)};
+  EXPECT_EQ(r4.waypoints, e4);
+}
+
+// Fixed-point costs (header): still optimal for a heavy clearance weight (fewer fractional bits)
+// and for coarse and fine resolutions.
+TEST(PathSearch, OptimalWithHeavyWeightAndOtherResolutions) {
+  std::uint32_t seed = 900;
+  for (const auto& [res, weight] : std::vector<std::pair<float, float>>{{0.05f, 1000.0f}, {1.0f, 3.0f}, {0.002f, 1.0f}}) {
+    TestGrid tg = maze(70, 50, ++seed);
+    tg.res = res;
+    InflatedGrid g;
+    InflationSettings is;
+    is.robot_radius_m = res;
+    inflate(tg.view(), is, g);
+    std::vector<std::size_t> trav;
+    for (std::size_t i = 0; i < g.cell_count(); ++i)
+      if (g.traversable[i]) trav.push_back(i);
+    ASSERT_GT(trav.size(), 10u);
+    std::mt19937 rng(seed);
+    std::uniform_int_distribution<std::size_t> pick(0, trav.size() - 1);
+    PathWorkspace ws;
+    PathSettings s;
+    s.clearance_weight = weight;
+    s.clearance_decay_m = 6.0f * res;
+    int found = 0;
+    for (int trial = 0; trial < 15; ++trial) {
+      const std::size_t a = trav[pick(rng)], b = trav[pick(rng)];
+      const PathResult r = plan_path(g, g.cell_center(a), g.cell_center(b), s, ws);
+      const RefResult ref = reference_dijkstra(g, a, {b}, s);
+      SCOPED_TRACE(::testing::Message() << "res " << res << " weight " << weight << " trial " << trial);
+      if (!ref.reachable) {
+        EXPECT_EQ(r.status, PathStatus::kNoPath);
+        continue;
+      }
+      ++found;
+      check_path(g, r, s);
+      EXPECT_NEAR(r.cost, ref.cost, 1e-5 * (1.0 + ref.cost));
+    }
+    EXPECT_GT(found, 3);
+  }
+}
+
 TEST(PathSearch, Statuses) {
   // Two rooms split by a wall at x = 20; a block of wall in room A at x = 5..9.
   TestGrid tg = blank(40, 20);
@@ -332,6 +415,9 @@ TEST(PathSearch, InvalidSettingsAndGrid) {
   s = PathSettings{};
   s.goal_tolerance_m = kNaN;
   EXPECT_DUET_ERROR((void)plan_path(g, a, a, s, ws), ErrorCode::kInvalidArgument, "goal_tolerance_m");
+  s = PathSettings{};
+  s.clearance_weight = 1e30f;  // finite, but beyond the fixed-point range of the search
+  EXPECT_DUET_ERROR((void)plan_path(g, a, a, s, ws), ErrorCode::kInvalidArgument, "clearance_weight");
   InflatedGrid bad = g;
   bad.clearance_m.resize(3);
   EXPECT_DUET_ERROR((void)plan_path(bad, a, a, PathSettings{}, ws), ErrorCode::kInvalidArgument, "width*height");

@@ -14,8 +14,22 @@
 ///     of the inflation, falling linearly to 0 at clearance_decay_m beyond it).
 /// The heuristic is the octile distance to the goal cell (or, with goal_tolerance_m > 0, the
 /// Euclidean distance to the goal point minus the tolerance), admissible and consistent because
-/// every step costs at least its length: A* returns a minimum-cost path. Ties are broken by larger
-/// g then smaller cell index (deterministic, serial).
+/// every step costs at least its length: A* returns a minimum-cost path.
+///
+/// Arithmetic: the search runs on fixed-point integer costs, unit u = resolution_m * 2^-F with
+/// F = min(30, 62 - ceil(log2(bound on any f in cells))) (F = 30 for any grid up to 2^30 cells at
+/// clearance_weight <= 1). An orthogonal step is exactly 2^F u, a diagonal one round(sqrt2 * 2^F) u,
+/// plus the penalty part rounded to the nearest u; the integer octile heuristic uses the same step
+/// lengths, so it stays exactly consistent. The returned path is optimal for these integer costs,
+/// hence within 2^(1-F) cell lengths per step of the real optimum; result.cost is recomputed in double
+/// along the returned path from the formula above.
+/// Tie rule (deterministic, serial): the open cell with the smallest f is expanded first; among
+/// equal f the one with the smallest heuristic (= largest g) first, the heuristic compared after a
+/// right shift that makes it fit beside the cell index in 64 bits (no shift up to about 1400x1400
+/// cells at F = 30, 1-2 bits at 2000x2000-4000x4000, i.e. to within 2^-28 cell lengths); then the
+/// smallest cell index. Consequence on an open grid without clearance cost: all diagonal steps come
+/// first, then the straight ones. Equal-cost paths are thus resolved identically on every run and
+/// thread count.
 ///
 /// Thread safety: plan_path() is serial and reentrant; concurrent calls need one PathWorkspace each.
 #include <duet/kernels/inflation.hpp>
@@ -70,18 +84,19 @@ struct PathResult {
 /// records are tagged with a generation number, so a call touches only the cells it searches).
 /// Not shareable between concurrent calls.
 struct PathWorkspace {
-  struct Node {          ///< heap entry (16 bytes)
-    double f;            ///< g + h [m]
-    float g;             ///< g as float, for tie-breaking only
-    std::uint32_t cell;
+  /// Heap entry (16 bytes): one 128-bit unsigned key hi:lo = [f][h >> shift | cell], so the heap
+  /// compares one integer (see plan_path for the fixed-point units and the tie rule).
+  struct Node {
+    std::uint64_t lo;    ///< (heuristic >> shift) << cell_bits | cell
+    std::uint64_t hi;    ///< f = g + h [fixed-point cost units]
   };
   struct CellRec {       ///< per-cell search record, valid when tag >> 1 == generation
-    double g;            ///< best cost so far [m]
+    std::int64_t g;      ///< best cost so far [fixed-point cost units]
     std::uint32_t tag;   ///< 2 * generation (open) or 2 * generation + 1 (closed)
     std::uint32_t parent;
   };
   std::vector<CellRec> rec;
-  std::vector<Node> heap;
+  std::vector<Node> heap;  ///< 4-ary min-heap
   std::vector<std::uint32_t> goal_stamp;  ///< goal-set membership (goal_tolerance_m > 0): == generation
   std::uint32_t generation = 0;
 };
@@ -92,8 +107,9 @@ struct PathWorkspace {
 /// or its cell just turned unknown/occupied) the search starts from the nearest traversable cell
 /// whose centre is within g.robot_radius_m of the start cell's centre (ties: smallest index) and
 /// result.start_moved is set; the robot can reach it without crossing more than its own radius.
-/// Throws duet::Error(kInvalidArgument) for invalid settings or an InflatedGrid whose buffers do
-/// not match its size.
+/// Throws duet::Error(kInvalidArgument) for invalid settings, an InflatedGrid whose buffers do not
+/// match its size, or a clearance_weight too large for the fixed-point costs of this grid
+/// (cell_count * (1 + clearance_weight) > ~2^57; e.g. clearance_weight > 2^35 on 2000x2000).
 [[nodiscard]] PathResult plan_path(const InflatedGrid& g, const Eigen::Vector2f& start_xy, const Eigen::Vector2f& goal_xy,
                                    const PathSettings& s, PathWorkspace& ws);
 
