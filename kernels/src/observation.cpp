@@ -379,6 +379,60 @@ struct ObservationModel::Impl {
     }
   }
 
+  /// observe_dda() with the min-range rule folded into the same walk: the walk starts at the
+  /// sensor (t = 0); a known obstacle in a cell left at or before t0 blocks the ray (entropy 0,
+  /// cells 0, hit at that cell's entry); the cells from t0 on are summed as observe_dda() does.
+  [[nodiscard]] RayObservation observe_dda_from_sensor(const Eigen::Vector2f& o, const Eigen::Vector2f& d, float t0,
+                                                       float t1) const noexcept {
+    if (!(t0 > 0.0f)) return observe_dda(o, d, t0, t1);
+    RayObservation r{0.0f, t1, false, 0};
+    detail::CellWalk w;
+    if (!w.init(view, o, d, 0.0f, t1)) return r;
+    const auto t_min = static_cast<std::int64_t>(static_cast<double>(t0) / w.inv_scale + 0.5);
+    const std::uint32_t* const cells = packed.data();
+    const unsigned width = static_cast<unsigned>(view.width), height = static_cast<unsigned>(view.height);
+    std::int64_t entered = -1;
+    for (;;) {  // cells before the min range: only a known obstacle matters
+      const std::int64_t tn = w.next();
+      if (tn > t_min || tn >= w.end) break;  // this cell reaches beyond t0: it is observed
+      const bool inside = static_cast<unsigned>(w.ix) < width && static_cast<unsigned>(w.iy) < height;
+      if (inside && (cells[packed_index(static_cast<unsigned>(w.ix), static_cast<unsigned>(w.iy))] & kOccupiedBit))
+        return RayObservation{0.0f, entered < 0 ? 0.0f : w.time(entered), true, 0};
+      entered = tn;
+      w.step();
+    }
+    return sum_walk(w, t0, t1);
+  }
+
+  /// Sums the entropy from the walk's current cell (entered at t0) to the hit or the walk's end.
+  [[nodiscard]] RayObservation sum_walk(detail::CellWalk& w, float t0, float t1) const noexcept {
+    RayObservation r{0.0f, t1, false, 0};
+    std::uint64_t sum = 0;
+    std::int32_t n = 0;
+    const std::uint32_t* const cells = packed.data();
+    const unsigned width = static_cast<unsigned>(view.width), height = static_cast<unsigned>(view.height);
+    std::int64_t entered = -1;  // entry time of the current cell (fixed point); -1: t0
+    for (;;) {
+      const bool inside = static_cast<unsigned>(w.ix) < width && static_cast<unsigned>(w.iy) < height;
+      const std::uint32_t wd =
+          inside ? cells[packed_index(static_cast<unsigned>(w.ix), static_cast<unsigned>(w.iy))] : kUnknownWord;
+      sum += word_entropy(wd);
+      ++n;
+      if (wd & kOccupiedBit) {
+        r.hit = true;
+        r.range_m = entered < 0 ? t0 : w.time(entered);
+        break;
+      }
+      const std::int64_t tn = w.next();
+      if (tn >= w.end) break;
+      entered = tn;
+      w.step();
+    }
+    r.entropy_bits = bits_of(sum);
+    r.cells = n;
+    return r;
+  }
+
   [[nodiscard]] RayObservation observe_dda(const Eigen::Vector2f& o, const Eigen::Vector2f& d, float t0, float t1) const noexcept {
     RayObservation r{0.0f, t1, false, 0};
     detail::CellWalk w;
@@ -626,8 +680,7 @@ void ObservationModel::observe(std::span<const Pose2> poses, std::span<const Sen
       for (int r = 0; r < s.rays; ++r) {
         Eigen::Vector2f org, dir;
         fan_ray(pose, s, c, sn, r, org, dir);
-        const float blocked = m.blocked_before(org, dir, s.min_range_m);
-        o[r] = blocked >= 0.0f ? RayObservation{0.0f, blocked, true, 0} : m.observe_dda(org, dir, s.min_range_m, s.max_range_m);
+        o[r] = m.observe_dda_from_sensor(org, dir, s.min_range_m, s.max_range_m);
       }
       return;
     }
