@@ -434,34 +434,11 @@ struct ObservationModel::Impl {
   }
 
   [[nodiscard]] RayObservation observe_dda(const Eigen::Vector2f& o, const Eigen::Vector2f& d, float t0, float t1) const noexcept {
-    RayObservation r{0.0f, t1, false, 0};
     detail::CellWalk w;
-    if (!w.init(view, o, d, t0, t1)) return r;
-    std::uint64_t sum = 0;
-    std::int32_t n = 0;
-    const std::uint32_t* const cells = packed.data();
-    const unsigned width = static_cast<unsigned>(view.width), height = static_cast<unsigned>(view.height);
-    std::int64_t entered = -1;  // entry time of the current cell (fixed point); -1: t0
-    for (;;) {
-      const bool inside = static_cast<unsigned>(w.ix) < width && static_cast<unsigned>(w.iy) < height;
-      const std::uint32_t wd =
-          inside ? cells[packed_index(static_cast<unsigned>(w.ix), static_cast<unsigned>(w.iy))] : kUnknownWord;
-      sum += word_entropy(wd);
-      ++n;
-      if (wd & kOccupiedBit) {
-        r.hit = true;
-        r.range_m = entered < 0 ? t0 : w.time(entered);
-        break;
-      }
-      const std::int64_t tn = w.next();
-      if (tn >= w.end) break;
-      entered = tn;
-      w.step();
-    }
-    r.entropy_bits = bits_of(sum);
-    r.cells = n;
-    return r;
+    if (!w.init(view, o, d, t0, t1)) return RayObservation{0.0f, t1, false, 0};
+    return sum_walk(w, t0, t1);
   }
+
 
   [[nodiscard]] RayHit cast_dda(const Eigen::Vector2f& o, const Eigen::Vector2f& d, float t0, float t1) const noexcept {
     RayHit r{t1, false};
