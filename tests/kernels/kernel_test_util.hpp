@@ -73,6 +73,33 @@ inline bool have_data(const std::string& rel) { return std::filesystem::exists(d
                    << " not found: ../shared/data is absent, skipping this real-data test";      \
   } while (0)
 
+/// The Willow Garage map of ../shared/data as a three-valued log-odds grid, row 0 at the lowest y
+/// (the PGM's first row is the largest y); 0.10 m cells, origin (0, 0). The file is not strictly
+/// trinary: besides 0 / 254 / 205 it holds grey levels (walls drawn anti-aliased, 0-204; light free
+/// space 206-253). With the .yaml thresholds (occupied p > 0.65, i.e. v < 90) only 544 cells would
+/// be occupied and the walls would read as unknown, so: 205 = unknown (NaN), darker = `occupied`,
+/// lighter = `free`. Empty (w = h = 0) if the file cannot be decoded.
+inline constexpr const char* kWillowMap = "maps/willow-2010-02-18-0.10.pgm";
+struct WillowGrid {
+  std::vector<float> logodds;
+  int w = 0, h = 0;
+};
+inline WillowGrid willow_trinary(float occupied, float free) {
+  const cv::Mat img = cv::imread(data_path(kWillowMap).string(), cv::IMREAD_GRAYSCALE);
+  WillowGrid g;
+  if (img.empty()) return g;
+  g.w = img.cols;
+  g.h = img.rows;
+  g.logodds.resize(static_cast<std::size_t>(g.w) * static_cast<std::size_t>(g.h));
+  for (int r = 0; r < img.rows; ++r)
+    for (int c = 0; c < img.cols; ++c) {
+      const int v = img.at<std::uint8_t>(r, c);
+      g.logodds[static_cast<std::size_t>((img.rows - 1 - r) * g.w + c)] =
+          v == 205 ? kNaN : v < 205 ? occupied : free;
+    }
+  return g;
+}
+
 #ifdef DUET_HAVE_PCL
 #define DUET_REQUIRE_PCL() (void)0
 #else

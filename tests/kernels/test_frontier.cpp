@@ -572,27 +572,17 @@ TEST(Frontier, VeryLongPathsUse64BitCosts) {
 
 // ---- real data: the Willow Garage map ----------------------------------------------------------------
 
-constexpr const char* kWillow = "maps/willow-2010-02-18-0.10.pgm";
+constexpr const char* kWillow = test::kWillowMap;
 
-// The Willow map as a log-odds grid with row 0 at the lowest y (the PGM's first row is the largest y).
-// The file is not strictly trinary: besides 0 / 254 / 205 it holds grey levels (walls drawn
-// anti-aliased, 0-204; light free space 206-253). With the .yaml thresholds (occupied p > 0.65,
-// i.e. v < 90) only 544 cells would be occupied and the walls would read as unknown, so: 205 =
-// unknown (NaN), darker = occupied, lighter = free.
+// The Willow map (test::willow_trinary(): 205 = unknown, darker = occupied, lighter = free).
 TestGrid load_willow() {
-  const cv::Mat img = cv::imread(test::data_path(kWillow).string(), cv::IMREAD_GRAYSCALE);
+  test::WillowGrid m = test::willow_trinary(kOcc, kFree);
   TestGrid g;
-  if (img.empty()) return g;
-  g.w = img.cols;
-  g.h = img.rows;
+  g.w = m.w;
+  g.h = m.h;
   g.res = 0.10f;
   g.origin = {0.0f, 0.0f};
-  g.l.resize(static_cast<std::size_t>(g.w) * static_cast<std::size_t>(g.h));
-  for (int r = 0; r < img.rows; ++r)
-    for (int c = 0; c < img.cols; ++c) {
-      const int v = img.at<std::uint8_t>(r, c);
-      g.l[static_cast<std::size_t>((img.rows - 1 - r) * g.w + c)] = v == 205 ? kNaN : v < 205 ? kOcc : kFree;
-    }
+  g.l = std::move(m.logodds);
   return g;
 }
 
