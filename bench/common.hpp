@@ -83,6 +83,7 @@ void register_partial_sim();
 void register_frontier();
 void register_path();
 void register_dwa();
+void register_render();  // issue 4: simulated RGB-D rendering (bench_render.cpp)
 
 /// Runs `body` in the arena of `threads` threads and reports a duet::Error (or any
 /// std::exception) as a skipped benchmark instead of aborting the whole run.

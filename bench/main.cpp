@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
   duet::bench::register_frontier();
   duet::bench::register_path();
   duet::bench::register_dwa();
+  duet::bench::register_render();
 #ifdef DUET_HAVE_PCL
   benchmark::AddCustomContext("duet_pcl", "PCL peers enabled");
 #else
