@@ -107,6 +107,8 @@ void validate(const GridUpdateSettings& s) {
     fail(ErrorCode::kInvalidArgument, "GridUpdateSettings: need min_logodds < 0 < max_logodds, both finite");
   if (!(s.max_ray_length_m > 0.0f) || !std::isfinite(s.max_ray_length_m))
     fail(ErrorCode::kInvalidArgument, "GridUpdateSettings.max_ray_length_m must be finite and > 0 m");
+  if (std::isnan(s.clear_max_height_m))
+    fail(ErrorCode::kInvalidArgument, "GridUpdateSettings.clear_max_height_m must not be NaN (+inf: every ray clears)");
   if (s.grow_margin_cells < 0 || s.grow_margin_cells > 100000)
     fail(ErrorCode::kInvalidArgument, "GridUpdateSettings.grow_margin_cells must be in [0, 100000]");
 }
@@ -148,10 +150,12 @@ void update_grid(OccupancyGrid& grid, const Eigen::Vector2f& sensor_xy, PointsVi
   const Eigen::Vector2i c0 = grid.cell_of(box.head<2>()), c1 = grid.cell_of(box.tail<2>());
   const int bw = c1.x() - c0.x() + 1, bh = c1.y() - c0.y() + 1;
   const std::size_t wn = static_cast<std::size_t>(bw) * static_cast<std::size_t>(bh);
-  ws.mask.assign(3 * wn, 0);
+  ws.mask.assign(4 * wn, 0);
   std::uint8_t* hit = ws.mask.data();
   std::uint8_t* end_free = hit + wn;
   std::uint8_t* ray_free = end_free + wn;
+  std::uint8_t* ray_end = ray_free + wn;  // end cells of the rays that clear
+  const float clear_z = settings.clear_max_height_m;
   auto win = [&](const Eigen::Vector2i& c) {
     return static_cast<std::size_t>(c.y() - c0.y()) * static_cast<std::size_t>(bw) + static_cast<std::size_t>(c.x() - c0.x());
   };
@@ -159,7 +163,12 @@ void update_grid(OccupancyGrid& grid, const Eigen::Vector2f& sensor_xy, PointsVi
   detail::for_blocks(n, kBlock, [&](std::size_t, std::size_t begin, std::size_t end) {
     Eigen::Vector2f xy;
     for (std::size_t i = begin; i < end; ++i)
-      if (used(i, xy)) set(labels[i] == PointLabel::kObstacle ? hit : end_free, win(grid.cell_of(xy)));
+      if (used(i, xy)) {
+        const bool obstacle = labels[i] == PointLabel::kObstacle;
+        const std::size_t w = win(grid.cell_of(xy));
+        set(obstacle ? hit : end_free, w);
+        if (!obstacle || !(points.ptr(i)[2] > clear_z)) set(ray_end, w);  // a non-finite z: as before
+      }
   });
 
   // 3. Free space along the 2D ray from the sensor to the centre of every distinct end cell
@@ -170,7 +179,7 @@ void update_grid(OccupancyGrid& grid, const Eigen::Vector2f& sensor_xy, PointsVi
     const double org_x = grid.origin().x(), org_y = grid.origin().y();
     detail::for_blocks(wn, 2048, [&](std::size_t, std::size_t begin, std::size_t end) {
       for (std::size_t w = begin; w < end; ++w) {
-        if (!hit[w] && !end_free[w]) continue;
+        if (!ray_end[w]) continue;
         const Eigen::Vector2i ec(c0.x() + static_cast<int>(w % static_cast<std::size_t>(bw)),
                                  c0.y() + static_cast<int>(w / static_cast<std::size_t>(bw)));
         // Crossing times in double, from the integer cell boundary at every step (no running

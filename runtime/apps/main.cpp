@@ -1,4 +1,4 @@
-// The `duet` command-line program: `duet map`, `duet profile`, `duet version`.
+// The `duet` command-line program: `duet explore`, `duet compare`, `duet map`, `duet profile`.
 #include "commands.hpp"
 
 #include <duet/kernels/error.hpp>
@@ -17,6 +17,8 @@ int main(int argc, char** argv) {
   int exit_code = 0;
   duet::app::add_map_command(app, exit_code);
   duet::app::add_profile_command(app, exit_code);
+  duet::app::add_explore_command(app, exit_code);
+  duet::app::add_compare_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

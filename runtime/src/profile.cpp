@@ -203,6 +203,7 @@ void validate_impl(const Profile& p, const Locator& loc) {
   c.range("mapping.grid_update.min_logodds", gu.min_logodds, kMinLogodds);
   c.range("mapping.grid_update.max_logodds", gu.max_logodds, kMaxLogodds);
   c.range("mapping.grid_update.max_ray_length_m", gu.max_ray_length_m, kRayLength);
+  if (!std::isinf(gu.clear_max_height_m)) c.range("mapping.grid_update.clear_max_height_m", gu.clear_max_height_m, kHeightBand);
   c.range("mapping.grid_update.grow_margin_cells", gu.grow_margin_cells, kGrowMargin);
   c.range("mapping.grid_resolution_m", m.grid_resolution_m, kGridResolution);
 
@@ -358,13 +359,14 @@ MappingSettings read_mapping(Reader& r, const YAML::Node& n) {
   if (const YAML::Node b = m.get("grid_update")) {
     GridUpdateSettings& gu = ms.grid_update;
     MapReader q(r, b, m.path_of("grid_update"),
-                {"hit_logodds", "miss_logodds", "min_logodds", "max_logodds", "clear_along_rays", "max_ray_length_m",
-                 "grow_margin_cells"});
+                {"hit_logodds", "miss_logodds", "min_logodds", "max_logodds", "clear_along_rays", "clear_max_height_m",
+                 "max_ray_length_m", "grow_margin_cells"});
     q.opt_real("hit_logodds", gu.hit_logodds);
     q.opt_real("miss_logodds", gu.miss_logodds);
     q.opt_real("min_logodds", gu.min_logodds);
     q.opt_real("max_logodds", gu.max_logodds);
     q.opt_bool("clear_along_rays", gu.clear_along_rays);
+    q.opt_real("clear_max_height_m", gu.clear_max_height_m);
     q.opt_real("max_ray_length_m", gu.max_ray_length_m);
     q.opt_int("grow_margin_cells", gu.grow_margin_cells, kGrowMargin);
   }

@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <algorithm>
 #include <random>
 #include <set>
@@ -230,6 +232,37 @@ TEST(Grid, SingleObstacleHitAndRay) {
   EXPECT_TRUE(std::isnan(g.at(16, 5)));
   EXPECT_TRUE(std::isnan(g.at(8, 4)));
   EXPECT_EQ(g.known_cells(), 14u);
+}
+
+TEST(Grid, RaysToHighObstaclePointsDoNotClear) {
+  // A wall point 1.5 m high beyond a low bench: the 2D ray to it passes over the bench in 3D,
+  // so with clear_max_height_m = 0.6 it must not clear anything; a low point and a floor point
+  // still clear their rays. The default (+inf) clears every ray.
+  GridUpdateSettings s;
+  s.grow_margin_cells = 0;
+  s.clear_max_height_m = 0.6f;
+  GridUpdateWorkspace ws;
+  const std::vector<Eigen::Vector3f> high{{1.55f, 0.55f, 1.5f}};
+  const std::vector<PointLabel> obstacle{PointLabel::kObstacle};
+  OccupancyGrid g(0.1f, Eigen::Vector2f(0, 0), 20, 10);
+  update_grid(g, Eigen::Vector2f(0.25f, 0.55f), high, obstacle, s, ws);
+  EXPECT_FLOAT_EQ(g.at(15, 5), 0.85f);  // the hit is still marked
+  for (int x = 2; x < 15; ++x) EXPECT_TRUE(std::isnan(g.at(x, 5))) << x;
+  EXPECT_EQ(g.known_cells(), 1u);
+  const std::vector<Eigen::Vector3f> low{{1.55f, 0.55f, 0.6f}};  // at the limit: clears
+  OccupancyGrid g2(0.1f, Eigen::Vector2f(0, 0), 20, 10);
+  update_grid(g2, Eigen::Vector2f(0.25f, 0.55f), low, obstacle, s, ws);
+  for (int x = 2; x < 15; ++x) EXPECT_FLOAT_EQ(g2.at(x, 5), -0.4f) << x;
+  const std::vector<Eigen::Vector3f> floor_pt{{1.55f, 0.55f, 3.0f}};  // floor label: always clears
+  OccupancyGrid g3(0.1f, Eigen::Vector2f(0, 0), 20, 10);
+  update_grid(g3, Eigen::Vector2f(0.25f, 0.55f), floor_pt, std::vector<PointLabel>{PointLabel::kFloor}, s, ws);
+  for (int x = 2; x <= 15; ++x) EXPECT_FLOAT_EQ(g3.at(x, 5), -0.4f) << x;
+  s.clear_max_height_m = std::numeric_limits<float>::infinity();
+  OccupancyGrid g4(0.1f, Eigen::Vector2f(0, 0), 20, 10);
+  update_grid(g4, Eigen::Vector2f(0.25f, 0.55f), high, obstacle, s, ws);
+  for (int x = 2; x < 15; ++x) EXPECT_FLOAT_EQ(g4.at(x, 5), -0.4f) << x;
+  s.clear_max_height_m = NAN;
+  EXPECT_THROW(validate(s), Error);
 }
 
 TEST(Grid, OneUpdatePerCellPerCallAndHitWins) {

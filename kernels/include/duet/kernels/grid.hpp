@@ -75,6 +75,11 @@ struct GridUpdateSettings {
   float min_logodds = -2.0f;    ///< clamp (p = 0.12), as OctoMap
   float max_logodds = 3.5f;     ///< clamp (p = 0.97), as OctoMap
   bool clear_along_rays = true; ///< free space is also cleared along each ray (DESIGN.md §7)
+  /// Only rays to floor points and to obstacle points with z <= this clear free space [m, in
+  /// the points' frame]; +inf = every ray (the default). A 2D ray to a high point (a wall above
+  /// a bench) passes OVER lower obstacles in 3D and would wrongly clear them; a ray whose end is
+  /// at most this high cannot pass over an obstacle taller than this and the sensor. Not NaN.
+  float clear_max_height_m = std::numeric_limits<float>::infinity();
   float max_ray_length_m = 8.0f;///< hits farther than this from the sensor are ignored [m]
   int grow_margin_cells = 40;   ///< growth step around new data [cells]
 };
@@ -86,7 +91,8 @@ struct GridUpdateWorkspace {
 
 /// One scan from one sensor at sensor_xy [m]: obstacle points mark their cells occupied,
 /// floor points mark their cells free, and (clear_along_rays) every cell crossed by the 2D ray
-/// from the sensor to the cell of each obstacle or floor point is free. Each cell gets at most
+/// from the sensor to the cell of each floor point and of each obstacle point no higher than
+/// clear_max_height_m is free. Each cell gets at most
 /// one update per call: hit if any obstacle point falls in it, else miss (OctoMap's
 /// computeUpdate semantics); rays run to the centre of each distinct end cell.
 /// kIgnored and non-finite points are skipped. labels has points.size() entries.

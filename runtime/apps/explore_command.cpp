@@ -1,0 +1,366 @@
+// `duet explore`: the paper's experiment in the simulator - a robot with the profile's RGB-D
+// sensors explores a world on its own and comes back with the cloud map, the grid map, its
+// trajectory, the time-area curve (Fig. 10) and a JSON summary.
+// `duet compare`: dual against single sensors over several seeds, both curves in one PNG.
+#include "commands.hpp"
+
+#include <duet/kernels/error.hpp>
+#include <duet/runtime/cloud_io.hpp>
+#include <duet/runtime/grid_io.hpp>
+#include <duet/runtime/plot.hpp>
+#include <duet/runtime/profile.hpp>
+#include <duet/runtime/sim/sim_explore.hpp>
+#include <duet/runtime/sim/world.hpp>
+
+#include <nlohmann/json.hpp>
+#include <tbb/task_arena.h>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <string>
+
+namespace duet::app {
+namespace {
+
+struct ExploreOptions {
+  std::string world = "lab";
+  std::string profile = "dual";
+  std::uint64_t seed = 1;
+  double max_time = 600.0;
+  std::string out = "out";
+  std::string sensor_rate = "pipeline";
+  int threads = 0;
+  bool realtime = false;
+  bool true_pose = false;
+  bool quiet = false;
+};
+
+struct CompareOptions {
+  std::string world = "lab";
+  int seeds = 3;
+  std::uint64_t first_seed = 1;
+  double max_time = 600.0;
+  std::string out = "out/compare";
+  int threads = 0;
+  bool quiet = false;
+};
+
+bool stderr_is_tty() { return ::isatty(2) != 0; }
+
+double parse_sensor_rate(const std::string& s) {
+  if (s == "pipeline") return 0.0;
+  if (s == "full") return -1.0;  // the profile's rate
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(s, &used);
+    if (used == s.size() && std::isfinite(v) && v > 0.0 && v <= 1000.0) return v;
+  } catch (const std::exception&) {
+  }
+  fail(ErrorCode::kInvalidArgument, "--sensor-rate '" + s + "': expected pipeline, full or a rate in (0, 1000] Hz");
+}
+
+nlohmann::json to_json(const sim::ExploreSummary& s) {
+  nlohmann::json j;
+  j["world"] = s.world;
+  j["profile"] = s.profile;
+  j["seed"] = s.seed;
+  j["stop_reason"] = sim::to_string(s.stop_reason);
+  j["explorer_status"] = s.explorer_status;
+  j["sim_time_s"] = s.sim_time_s;
+  j["wall_time_s"] = s.wall_time_s;
+  j["speed_vs_real_time"] = s.wall_time_s > 0.0 ? s.sim_time_s / s.wall_time_s : 0.0;
+  j["explored_area_m2"] = s.explored_area_m2;
+  j["reachable_free_area_m2"] = s.reachable_free_area_m2;
+  j["coverage"] = s.coverage;
+  auto opt_time = [](double t) { return t >= 0.0 ? nlohmann::json(t) : nlohmann::json(nullptr); };
+  j["t90_s"] = opt_time(s.t90_s);
+  j["t_31m2_s"] = opt_time(s.t_paper_area_s);
+  j["target_region_entered_s"] = opt_time(s.target_entered_s);
+  j["path_length_m"] = s.path_length_m;
+  j["collisions"] = s.collisions;
+  const auto& e = s.explorer;
+  j["decisions"] = {{"count", e.decisions},
+                    {"simulated_goals", e.simulated_goals},
+                    {"frontier_fallback_goals", e.frontier_goals},
+                    {"mean_time_ms", e.decisions ? 1e3 * e.decision_time_sum_s / e.decisions : 0.0},
+                    {"max_time_ms", 1e3 * e.decision_time_max_s}};
+  j["goals"] = {{"reached", e.goals_reached},
+                {"abandoned_timeout", e.goals_abandoned_timeout},
+                {"abandoned_no_path", e.goals_abandoned_no_path},
+                {"abandoned_stuck", e.goals_abandoned_stuck},
+                {"abandoned_blocked", e.goals_abandoned_blocked},
+                {"replans", e.replans}};
+  j["frames_rendered"] = s.frames_rendered;
+  j["sets_integrated"] = s.sets_integrated;
+  j["sets_not_integrated"] = s.sets_not_integrated;
+  j["frame_drops"] = s.frame_drops;
+  j["odometry_unmatched"] = s.odometry_unmatched;
+  j["odometry_error_end_m"] = s.odometry_error_m;
+  return j;
+}
+
+void write_tum(const std::filesystem::path& path, const std::vector<sim::StampedPose>& traj) {
+  std::ofstream f(path);
+  if (!f) fail(ErrorCode::kIo, path.string() + ": cannot write");
+  f << "# timestamp tx ty tz qx qy qz qw\n";
+  char buf[256];
+  for (const auto& p : traj) {
+    const double h = 0.5 * p.pose.theta;
+    std::snprintf(buf, sizeof buf, "%.3f %.4f %.4f 0 0 0 %.6f %.6f\n", p.t_s, static_cast<double>(p.pose.x),
+                  static_cast<double>(p.pose.y), std::sin(h), std::cos(h));
+    f << buf;
+  }
+  if (!f) fail(ErrorCode::kIo, path.string() + ": write failed");
+}
+
+void write_curve_csv(const std::filesystem::path& path, const std::vector<sim::CurvePoint>& curve) {
+  std::ofstream f(path);
+  if (!f) fail(ErrorCode::kIo, path.string() + ": cannot write");
+  f << "time_s,explored_area_m2,coverage\n";
+  char buf[128];
+  for (const auto& c : curve) {
+    std::snprintf(buf, sizeof buf, "%.2f,%.3f,%.4f\n", c.t_s, c.area_m2, c.coverage);
+    f << buf;
+  }
+  if (!f) fail(ErrorCode::kIo, path.string() + ": write failed");
+}
+
+PlotSeries curve_series(const std::vector<sim::CurvePoint>& curve, std::string label, Rgb8 colour, int width) {
+  PlotSeries s;
+  s.label = std::move(label);
+  s.colour = colour;
+  s.width_px = width;
+  for (const auto& c : curve) {
+    s.x.push_back(c.t_s);
+    s.y.push_back(c.area_m2);
+  }
+  return s;
+}
+
+std::vector<PlotMarker> paper_markers() {
+  return {{"paper, dual: 31.0 m^2 in 196 s", 196.0, 31.0, {30, 90, 200}},
+          {"paper, single: 27.6 m^2 in 297 s", 297.0, 27.6, {220, 120, 20}}};
+}
+
+nlohmann::json run_log(const sim::SimExplore& run) {
+  nlohmann::json j;
+  j["decisions"] = nlohmann::json::array();
+  for (const auto& d : run.explorer().decisions())
+    j["decisions"].push_back({{"t_s", d.t_s},
+                              {"status", duet::to_string(d.status)},
+                              {"reward_bits", d.reward_bits},
+                              {"robot", {d.robot.x, d.robot.y, d.robot.theta}},
+                              {"goal", {d.goal.x, d.goal.y, d.goal.theta}},
+                              {"planned", d.planned},
+                              {"frontier_cells", d.frontier_cells},
+                              {"reachable_frontier_clusters", d.reachable_clusters},
+                              {"nearest_frontier", {d.nearest_frontier.x(), d.nearest_frontier.y()}},
+                              {"wall_time_ms", 1e3 * d.wall_time_s}});
+  j["collisions"] = nlohmann::json::array();
+  for (const auto& c : run.collision_log())
+    j["collisions"].push_back({{"t_s", c.t_s},
+                               {"true_pose", {c.true_pose.x, c.true_pose.y, c.true_pose.theta}},
+                               {"command", {c.command.v, c.command.omega}}});
+  return j;
+}
+
+void write_outputs(sim::SimExplore& run, const std::filesystem::path& out) {
+  std::filesystem::create_directories(out);
+  const PointCloud& cloud = run.mapper().cloud();
+  write_pcd(out / "cloud.pcd", cloud, PcdEncoding::kBinaryCompressed);
+  write_ply(out / "cloud.ply", cloud, PlyEncoding::kBinaryLittleEndian);
+  const OccupancyGrid& grid = run.mapper().grid();
+  write_map_server(grid, out / "grid.yaml");
+  GridPngOptions png;
+  png.scale = std::max(1, 800 / std::max(1, std::max(grid.width(), grid.height())));
+  for (const auto& p : run.estimated_trajectory()) png.polyline.emplace_back(p.pose.x, p.pose.y);
+  png.dots = run.explorer().frontier_points();
+  write_grid_png(grid, out / "grid.png", png);
+  write_tum(out / "trajectory.tum", run.estimated_trajectory());
+  write_tum(out / "trajectory_true.tum", run.true_trajectory());
+  write_curve_csv(out / "curve.csv", run.curve());
+  const auto sum = run.summary();
+  PlotOptions po;
+  po.title = "Explored area over time: " + sum.profile + " on " + sum.world + " (seed " + std::to_string(sum.seed) + ")";
+  po.x_label = "time [s]";
+  po.y_label = "explored area [m^2]";
+  po.markers = paper_markers();
+  write_plot_png(out / "curve.png", {curve_series(run.curve(), sum.profile, {30, 90, 200}, 2)}, po);
+  std::ofstream(out / "summary.json") << to_json(sum).dump(2) << "\n";
+  std::ofstream(out / "log.json") << run_log(run).dump(1) << "\n";
+}
+
+void print_progress(const sim::SimExplore& run, bool tty, const char* prefix) {
+  const auto p = run.measure();
+  const auto s = run.summary();
+  std::fprintf(stderr, "%s%st = %6.1f s  area %6.2f m^2  coverage %5.1f %%  goals %d  collisions %zu  %.1fx real time%s",
+               tty ? "\r\033[K" : "", prefix, p.t_s, p.area_m2, 100.0 * p.coverage, s.explorer.goals_reached, s.collisions,
+               s.wall_time_s > 0.0 ? s.sim_time_s / s.wall_time_s : 0.0, tty ? "" : "\n");
+}
+
+sim::ExploreSettings make_settings(const Profile& profile, std::uint64_t seed, double max_time, double sensor_rate) {
+  sim::ExploreSettings es;
+  es.seed = seed;
+  es.max_time_s = max_time;
+  if (sensor_rate < 0.0) {
+    double r = 0.0;
+    for (const auto& s : profile.sensors) r = std::max(r, static_cast<double>(s.rate_hz));
+    es.sensor_rate_hz = r;
+  } else {
+    es.sensor_rate_hz = sensor_rate;
+  }
+  return es;
+}
+
+int run_explore(const ExploreOptions& o) {
+  if (!(std::isfinite(o.max_time) && o.max_time > 0.0 && o.max_time <= 1e6))
+    fail(ErrorCode::kInvalidArgument, "--max-time must be in (0, 1e6] s, got " + std::to_string(o.max_time));
+  const double rate = parse_sensor_rate(o.sensor_rate);
+  sim::World world = sim::resolve_world(o.world);
+  Profile profile = resolve_profile(o.profile);
+  sim::ExploreSettings es = make_settings(profile, o.seed, o.max_time, rate);
+  es.realtime = o.realtime;
+  es.use_true_pose = o.true_pose;
+  const bool tty = stderr_is_tty() && !o.quiet;
+  tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
+  arena.execute([&] {
+    if (!o.quiet)
+      std::fprintf(stderr, "duet explore: world '%s' (%s), profile '%s' (%zu sensors), seed %llu, max %.0f s%s%s\n",
+                   world.name.c_str(), world.source.c_str(), profile.name.c_str(), profile.sensors.size(),
+                   static_cast<unsigned long long>(o.seed), o.max_time, o.realtime ? ", real time" : "",
+                   o.true_pose ? ", TRUE POSE (debugging)" : "");
+    sim::SimExplore run(std::move(world), std::move(profile), es);
+    run.run([&](const sim::SimExplore& r) {
+      if (!o.quiet) print_progress(r, tty, "");
+    });
+    if (tty) std::fputc('\n', stderr);
+    write_outputs(run, o.out);
+    const auto s = run.summary();
+    if (!o.quiet) {
+      std::fprintf(stderr,
+                   "duet explore: stopped (%s%s%s) at %.1f s: %.2f m^2 explored, coverage %.1f %% of %.2f m^2 reachable, "
+                   "%zu collisions, path %.1f m; wrote %s/{cloud.pcd, cloud.ply, grid.yaml, grid.pgm, grid.png, "
+                   "trajectory.tum, trajectory_true.tum, curve.csv, curve.png, summary.json, log.json}\n",
+                   sim::to_string(s.stop_reason), s.explorer_status.empty() ? "" : ": ", s.explorer_status.c_str(),
+                   s.sim_time_s, s.explored_area_m2, 100.0 * s.coverage, s.reachable_free_area_m2, s.collisions,
+                   s.path_length_m, o.out.c_str());
+    }
+  });
+  return 0;
+}
+
+int run_compare(const CompareOptions& o) {
+  if (o.seeds < 1 || o.seeds > 1000) fail(ErrorCode::kInvalidArgument, "--seeds must be in [1, 1000]");
+  const sim::World world = sim::resolve_world(o.world);
+  const std::filesystem::path out(o.out);
+  std::filesystem::create_directories(out);
+  tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
+  const bool tty = stderr_is_tty() && !o.quiet;
+  nlohmann::json runs = nlohmann::json::array();
+  std::vector<PlotSeries> series;
+  std::ofstream csv(out / "compare.csv");
+  csv << "profile,seed,time_s,explored_area_m2,coverage\n";
+  arena.execute([&] {
+    for (const char* name : {"dual", "single"}) {
+      for (int k = 0; k < o.seeds; ++k) {
+        const std::uint64_t seed = o.first_seed + static_cast<std::uint64_t>(k);
+        Profile profile = resolve_profile(name);
+        sim::ExploreSettings es = make_settings(profile, seed, o.max_time, 0.0);
+        sim::SimExplore run(world, std::move(profile), es);
+        const std::string prefix = std::string(name) + " seed " + std::to_string(seed) + ": ";
+        run.run([&](const sim::SimExplore& r) {
+          if (!o.quiet) print_progress(r, tty, prefix.c_str());
+        });
+        if (tty) std::fputc('\n', stderr);
+        const bool dual = std::string(name) == "dual";
+        series.push_back(curve_series(run.curve(), k == 0 ? name : "", dual ? Rgb8{30, 90, 200} : Rgb8{220, 120, 20}, 2));
+        for (const auto& c : run.curve()) {
+          char buf[160];
+          std::snprintf(buf, sizeof buf, "%s,%llu,%.2f,%.3f,%.4f\n", name, static_cast<unsigned long long>(seed), c.t_s,
+                        c.area_m2, c.coverage);
+          csv << buf;
+        }
+        runs.push_back(to_json(run.summary()));
+      }
+    }
+  });
+  PlotOptions po;
+  po.title = "Time-area curves on " + world.name + ": dual vs single RGB-D (" + std::to_string(o.seeds) + " seeds each)";
+  po.x_label = "time [s]";
+  po.y_label = "explored area [m^2]";
+  po.markers = paper_markers();
+  write_plot_png(out / "compare.png", series, po);
+  // Means per profile of the times to the paper's area and to 90 % coverage.
+  nlohmann::json j;
+  j["world"] = world.name;
+  j["runs"] = runs;
+  for (const char* name : {"dual", "single"}) {
+    double t31 = 0.0, t90 = 0.0, cov = 0.0;
+    int n31 = 0, n90 = 0, n = 0;
+    std::size_t collisions = 0;
+    for (const auto& r : runs) {
+      if (r["profile"].get<std::string>().find(name) == std::string::npos) continue;
+      ++n;
+      cov += r["coverage"].get<double>();
+      collisions += r["collisions"].get<std::size_t>();
+      if (!r["t_31m2_s"].is_null()) {
+        t31 += r["t_31m2_s"].get<double>();
+        ++n31;
+      }
+      if (!r["t90_s"].is_null()) {
+        t90 += r["t90_s"].get<double>();
+        ++n90;
+      }
+    }
+    j["mean"][name] = {{"runs", n},
+                       {"coverage", n ? cov / n : 0.0},
+                       {"collisions", collisions},
+                       {"runs_reaching_31m2", n31},
+                       {"t_31m2_s", n31 ? nlohmann::json(t31 / n31) : nlohmann::json(nullptr)},
+                       {"runs_reaching_90pct", n90},
+                       {"t90_s", n90 ? nlohmann::json(t90 / n90) : nlohmann::json(nullptr)}};
+  }
+  std::ofstream(out / "compare.json") << j.dump(2) << "\n";
+  if (!o.quiet) std::fprintf(stderr, "duet compare: wrote %s/{compare.png, compare.csv, compare.json}\n%s\n", o.out.c_str(), j["mean"].dump(2).c_str());
+  return 0;
+}
+
+}  // namespace
+
+void add_explore_command(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<ExploreOptions>();
+  auto* cmd = app.add_subcommand("explore", "Explore a simulated world autonomously (the paper's experiment) and write the maps");
+  cmd->add_option("-w,--world", o->world, "a built-in world (lab), a world YAML or a map_server map YAML")->capture_default_str();
+  cmd->add_option("-p,--profile", o->profile, "robot profile: dual, single or a profile YAML")->capture_default_str();
+  cmd->add_option("-s,--seed", o->seed, "random seed (sensor and odometry noise, Procedure 1)")->capture_default_str();
+  cmd->add_option("-t,--max-time", o->max_time, "simulated time limit [s]")->capture_default_str();
+  cmd->add_option("-o,--out", o->out, "output folder")->capture_default_str();
+  cmd->add_option("--sensor-rate", o->sensor_rate,
+                  "render rate: pipeline (what the mapper consumes, 1 Hz), full (the profile's 30 Hz) or a rate in Hz")
+      ->capture_default_str();
+  cmd->add_flag("--realtime", o->realtime, "pace the simulation by the wall clock");
+  cmd->add_flag("--true-pose", o->true_pose, "DEBUGGING: map with the true pose instead of the wheel odometry");
+  cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
+  cmd->callback([o, &exit_code] { exit_code = run_explore(*o); });
+}
+
+void add_compare_command(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<CompareOptions>();
+  auto* cmd = app.add_subcommand("compare", "Explore with dual and with single sensors over several seeds; plot both curves (Fig. 10)");
+  cmd->add_option("-w,--world", o->world, "a built-in world (lab), a world YAML or a map_server map YAML")->capture_default_str();
+  cmd->add_option("-n,--seeds", o->seeds, "runs per profile")->capture_default_str();
+  cmd->add_option("--first-seed", o->first_seed, "seed of the first run")->capture_default_str();
+  cmd->add_option("-t,--max-time", o->max_time, "simulated time limit per run [s]")->capture_default_str();
+  cmd->add_option("-o,--out", o->out, "output folder")->capture_default_str();
+  cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
+  cmd->callback([o, &exit_code] { exit_code = run_compare(*o); });
+}
+
+}  // namespace duet::app

@@ -1,0 +1,160 @@
+#pragma once
+/// @file explorer.hpp
+/// The explorer and the controller of the runtime (paper §3, Fig. 6; DESIGN.md §3) on the
+/// exploration kernels: it keeps the observation model and the inflated grid of the latest map,
+/// decides goals (partial map simulation, then the global frontier search), plans the global
+/// path to the goal (A* on the inflated grid) and follows it with the dynamic window.
+///
+/// Goal life cycle (the paper: "a new goal when the last is reached or its time limit passes"):
+///  - a decision is taken when there is no goal (start, goal reached, goal abandoned);
+///  - a frontier goal, once reached, is blacklisted for good (if it is still a frontier the
+///    unknown cells behind it cannot be seen from there);
+///  - a goal is abandoned, and blacklisted for blacklist_ttl_s, when its time limit passes
+///    (goal_timeout_s + path length / nominal speed), when no path to it exists, or when the
+///    dynamic window finds no admissible trajectory (or keeps recovering) for too long;
+///  - the path is re-planned from the robot at every map update (the grid changed), and
+///    abandoned when the goal cell became occupied or non-traversable.
+///  - the dynamic window sees UNKNOWN cells as obstacles (the global path does not, so that
+///    frontiers stay reachable): an RGB-D sensor sees nothing nearer than its min range
+///    (0.5 m), so an obstacle the robot did not see on its way in stays unknown once it is
+///    close, and driving into unknown space near the robot is driving blind. The cells the
+///    robot's body has covered (its trail) are free - costmap_2d's footprint clearing - so the
+///    robot is never inside an unknown "obstacle" at its own position.
+///  - exploration ends with the decision's status when it has no goal (no frontier left, all
+///    unreachable, all blacklisted, robot blocked) - after `final_retries` further decisions
+///    at later map updates, because one more map update often re-opens a frontier; with
+///    stop_when_no_frontier, a simulated goal does not keep it going once no reachable frontier
+///    is left (see ExplorerSettings).
+///
+/// Frames: all poses in the map frame (the frame of the grid given to update_map()).
+/// Thread safety: one Explorer per robot; calls are not thread-safe (one at a time); the kernels
+/// run TBB-parallel in the caller's task arena, and results do not depend on the thread count.
+#include <duet/kernels/dwa.hpp>
+#include <duet/kernels/exploration.hpp>
+#include <duet/kernels/grid.hpp>
+#include <duet/kernels/inflation.hpp>
+#include <duet/kernels/observation.hpp>
+#include <duet/kernels/path.hpp>
+#include <duet/runtime/profile.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace duet {
+
+struct ExplorerSettings {
+  float goal_timeout_s = 20.0f;       ///< fixed part of a goal's time limit [s], (0, inf)
+  float nominal_speed_mps = 0.3f;     ///< path length / this is added to the time limit [m/s], (0, inf)
+  float blacklist_ttl_s = 60.0f;      ///< how long an abandoned goal stays blacklisted [s], (0, inf]
+  float stuck_timeout_s = 4.0f;       ///< no admissible trajectory for this long abandons the goal [s], (0, inf)
+  int final_retries = 3;              ///< decisions at later map updates before giving up, [0, 1000]
+  /// Exploration is complete when no reachable frontier is left, even if the partial map
+  /// simulation still offers a goal: its reward (Eq. 5 entropy reduction) never reaches zero
+  /// because known cells below the log-odds clamp keep gaining from re-observation (measured
+  /// on the lab: 10-60 bits per goal at 99 % coverage), so R_g <= eps_R alone never ends a run.
+  /// Costs one frontier search per simulated goal. false: the paper's rule only.
+  bool stop_when_no_frontier = true;
+};
+void validate(const ExplorerSettings& s);
+
+enum class ExplorerState {
+  kIdle,        ///< no map yet
+  kExploring,   ///< following a goal
+  kDone,        ///< stopped; see stop_reason()
+};
+
+/// Counters and timings of one run (decision time is wall time of decide()).
+struct ExplorerStats {
+  int decisions = 0;              ///< decide_goal() calls
+  int simulated_goals = 0;        ///< goals from the partial map simulation
+  int frontier_goals = 0;         ///< goals from the frontier fallback (R_g <= eps_R)
+  int goals_reached = 0;
+  int goals_abandoned_timeout = 0;
+  int goals_abandoned_no_path = 0;
+  int goals_abandoned_stuck = 0;
+  int goals_abandoned_blocked = 0;   ///< goal cell became occupied or non-traversable
+  int replans = 0;
+  double decision_time_sum_s = 0.0;
+  double decision_time_max_s = 0.0;
+};
+
+/// One decision, for the run's log.
+struct DecisionRecord {
+  double t_s = 0.0;                 ///< runtime clock
+  ExplorationStatus status = ExplorationStatus::kNoFrontier;
+  float reward_bits = 0.0f;         ///< R_g of the partial map simulation
+  Pose2 robot;                      ///< where the robot was
+  Pose2 goal;                       ///< the goal (if any)
+  bool planned = false;             ///< a path to the goal was found
+  std::size_t frontier_cells = 0;   ///< frontier cells in kept clusters (when the search ran)
+  int reachable_clusters = 0;       ///< frontier clusters the robot can reach (when the search ran)
+  Eigen::Vector2f nearest_frontier{0.0f, 0.0f};  ///< the nearest reachable cluster's nearest cell
+  double wall_time_s = 0.0;         ///< how long decide_goal() took
+};
+
+class Explorer {
+ public:
+  /// `profile.exploration` configures the kernels; its sensors give the observation sectors.
+  explicit Explorer(const Profile& profile, const ExplorerSettings& settings = {});
+
+  /// The latest map (1 Hz): rebuilds the observation model and the inflated grid, re-plans the
+  /// current goal's path. `now_s` is the runtime clock.
+  void update_map(const OccupancyGrid& grid, const Pose2& robot, double now_s);
+
+  /// One control period (20 Hz): takes a decision if needed, then the dynamic window's command.
+  /// `current` is the chassis' twist (odometry). Returns a zero twist when idle or done.
+  Twist control(const Pose2& robot, const Twist& current, double now_s);
+
+  [[nodiscard]] ExplorerState state() const noexcept { return state_; }
+  /// Why exploration stopped (kDone): the last decision's status.
+  [[nodiscard]] ExplorationStatus stop_status() const noexcept { return stop_status_; }
+  [[nodiscard]] const ExplorerStats& stats() const noexcept { return stats_; }
+  [[nodiscard]] const std::optional<Pose2>& goal() const noexcept { return goal_; }
+  [[nodiscard]] const std::vector<Eigen::Vector2f>& path() const noexcept { return path_; }
+  [[nodiscard]] const InflatedGrid& inflated() const noexcept { return inflated_; }
+  /// The dynamic window's grid: unknown cells are obstacles, the trail is free.
+  [[nodiscard]] const InflatedGrid& local_grid() const noexcept { return local_; }
+  [[nodiscard]] const ExplorationDecision& last_decision() const noexcept { return decision_; }
+  /// Every decision so far.
+  [[nodiscard]] const std::vector<DecisionRecord>& decisions() const noexcept { return log_; }
+  /// Frontier cells (kept clusters) found by the last decision that ran the frontier search
+  /// (world xy, for pictures).
+  [[nodiscard]] const std::vector<Eigen::Vector2f>& frontier_points() const noexcept { return frontier_xy_; }
+
+ private:
+  void decide(const Pose2& robot, double now_s);
+  bool plan(const Pose2& robot);
+  void abandon(int& counter, double now_s);
+
+  Profile profile_;
+  ExplorerSettings settings_;
+  std::vector<SensorSector> sectors_;
+  ObservationModel model_;
+  InflatedGrid inflated_;
+  InflatedGrid local_;
+  OccupancyGrid local_grid_{0.05f};
+  std::vector<Eigen::Vector2f> trail_;  ///< robot positions, 0.05 m apart
+  GoalBlacklist blacklist_;
+  ExplorationWorkspace ws_;
+  PathWorkspace path_ws_;
+  DwaState dwa_state_;
+  DwaWorkspace dwa_ws_;
+  ExplorationDecision decision_;
+  ExplorerState state_ = ExplorerState::kIdle;
+  ExplorationStatus stop_status_ = ExplorationStatus::kNoFrontier;
+  ExplorerStats stats_;
+  bool have_map_ = false;
+  bool model_geometry_valid_ = false;
+  std::optional<Pose2> goal_;
+  std::vector<Eigen::Vector2f> path_;
+  double goal_deadline_s_ = 0.0;
+  double stuck_since_s_ = -1.0;
+  int no_goal_decisions_ = 0;  ///< consecutive decisions without a goal
+  bool wait_for_map_ = false;   ///< the last decision found nothing: wait for the next map
+  std::uint64_t decision_seed_ = 0;
+  std::vector<DecisionRecord> log_;
+  std::vector<Eigen::Vector2f> frontier_xy_;
+};
+
+}  // namespace duet

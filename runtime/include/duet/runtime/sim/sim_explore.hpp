@@ -1,0 +1,194 @@
+#pragma once
+/// @file sim_explore.hpp
+/// The paper's experiment end to end in the simulator (issue 4): a robot with the profile's
+/// RGB-D sensors set down in a World explores it through the same runtime pieces a real robot
+/// uses - sensor frames and wheel odometry, the approximate-time synchronizer, the mapper on
+/// the mapping kernels, the explorer and the controller on the exploration kernels - on a
+/// clock that is simulated (lockstep, default) or the wall clock (realtime).
+///
+/// Scheduler (paper §4.2, DESIGN.md §3), one loop iteration per control period (20 Hz):
+///  1. the chassis advances one period (physics at 5 ms, odometry messages at 50 Hz);
+///  2. the sensors render when their period is due (sensor_rate_hz; default: the map rate,
+///     i.e. only the frames the pipeline consumes), stamped with the render time, posed by the
+///     TRUE robot pose (the world does not know about odometry drift);
+///  3. frames and odometry go through the synchronizer (streams: sensor 0..n-1, odometry); each
+///     emitted set whose stamp reaches the next map time is integrated by the mapper at the
+///     pose of its odometry message (1 Hz), and the explorer gets the new grid; sets between
+///     map times are counted as not integrated (frames for visual odometry, not built yet);
+///  4. pose (20 Hz): the noisy wheel odometry - the true pose only with use_true_pose
+///     (a debugging option, never the default);
+///  5. control (20 Hz): the explorer decides goals (a new one when the last is reached or its
+///     time limit passes) and the dynamic window's command goes to the chassis.
+/// Frames: the odometry starts at the world's start pose, so the map frame is the world frame
+/// up to odometry drift; coverage is measured by looking up the world's reachable free cells
+/// in the map.
+///
+/// Determinism: the same world, profile and seed give the same trajectory, map and summary
+/// (except wall times) for any number of threads, in lockstep mode.
+/// Thread safety: one SimExplore per thread of calls; it runs TBB-parallel kernels in the
+/// caller's task arena.
+#include <duet/kernels/grid.hpp>
+#include <duet/runtime/explorer.hpp>
+#include <duet/runtime/mapper.hpp>
+#include <duet/runtime/profile.hpp>
+#include <duet/runtime/sim/chassis.hpp>
+#include <duet/runtime/sim/renderer.hpp>
+#include <duet/runtime/sim/world.hpp>
+#include <duet/runtime/clock.hpp>
+#include <duet/runtime/synchronizer.hpp>
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace duet::sim {
+
+struct ExploreSettings {
+  std::uint64_t seed = 1;          ///< seeds the chassis noise, the sensor noise and Procedure 1
+  double max_time_s = 900.0;       ///< stop after this much simulated time [s], (0, 1e6]
+  double control_rate_hz = 20.0;   ///< control and pose rate [Hz] (paper §4.2: 20 Hz), (0, 1000]
+  double map_rate_hz = 1.0;        ///< mapper + grid + explorer map update [Hz] (paper §4.2: 1 Hz), (0, control rate]
+  /// Sensor render rate [Hz]; 0 = the map rate (render only what the pipeline consumes, the
+  /// default); the profile's rate (30 Hz) renders every frame a Kinect would give. [0, 1000]
+  double sensor_rate_hz = 0.0;
+  bool realtime = false;           ///< pace the loop by the wall clock (`--realtime`)
+  bool use_true_pose = false;      ///< DEBUGGING ONLY: map and plan with the true pose
+  double curve_period_s = 1.0;     ///< time-area curve sampling [s], (0, 60]
+  float coverage_resolution_m = 0.05f;  ///< ground-truth raster for coverage [m], (0, 1]
+  ExplorerSettings explorer;
+  RenderSettings render;
+  /// Chassis simulation: from the profile's chassis (limits, odometry rate) with the gyro
+  /// heading of a Kobuki when unset; its seed is replaced by a value derived from `seed`.
+  std::optional<ChassisSimSettings> chassis;
+  ApproximateTimeSettings sync;    ///< the synchronizer (queue size, max interval)
+};
+void validate(const ExploreSettings& s);
+
+struct CurvePoint {
+  double t_s = 0.0;          ///< simulated time [s]
+  double area_m2 = 0.0;      ///< explored area: known (free or occupied) cells of the grid [m^2]
+  double coverage = 0.0;     ///< fraction of the world's reachable free area known as free, [0, 1]
+};
+
+/// Why the run stopped.
+enum class StopReason {
+  kRunning,
+  kExplorerDone,   ///< the explorer found nothing left to explore (see explorer_status)
+  kTimeLimit,      ///< max_time_s reached
+};
+[[nodiscard]] const char* to_string(StopReason r);
+
+struct ExploreSummary {
+  std::string world, profile;
+  std::uint64_t seed = 0;
+  StopReason stop_reason = StopReason::kRunning;
+  std::string explorer_status;           ///< the explorer's last decision status (when done)
+  double sim_time_s = 0.0;
+  double wall_time_s = 0.0;
+  double explored_area_m2 = 0.0;
+  double reachable_free_area_m2 = 0.0;   ///< the denominator of coverage
+  double coverage = 0.0;
+  double t90_s = -1.0;                   ///< first time coverage >= 90 % (-1: never)
+  double t_paper_area_s = -1.0;          ///< first time area >= 31.0 m^2 (paper: 196 s dual) (-1: never)
+  double target_entered_s = -1.0;        ///< first time the true pose entered the target region (-1: never / none)
+  double path_length_m = 0.0;            ///< true path length
+  std::size_t collisions = 0;
+  ExplorerStats explorer;
+  std::size_t frames_rendered = 0;
+  std::size_t sets_integrated = 0;       ///< synchronized sets the mapper integrated
+  std::size_t sets_not_integrated = 0;   ///< sets between map times (no consumer yet)
+  std::uint64_t frame_drops = 0;         ///< sensor frames the synchronizer dropped (all sensors)
+  std::uint64_t odometry_unmatched = 0;  ///< odometry messages in no set (expected: 50 Hz vs the sensor rate)
+  double odometry_error_m = 0.0;         ///< |odometry - truth| at the end [m]
+};
+
+/// One collision (a contact onset of the chassis).
+struct CollisionRecord {
+  double t_s = 0.0;
+  Pose2 true_pose;     ///< where the robot stopped
+  Twist command;       ///< the command it was following
+};
+
+/// One stamped pose of a trajectory.
+struct StampedPose {
+  double t_s = 0.0;
+  Pose2 pose;
+};
+
+class SimExplore {
+ public:
+  /// Builds the renderer, the chassis, the mapper and the explorer. Throws duet::Error for an
+  /// invalid world, profile or settings (the message names what is wrong).
+  SimExplore(World world, Profile profile, ExploreSettings settings = {});
+  ~SimExplore();
+  SimExplore(const SimExplore&) = delete;
+  SimExplore& operator=(const SimExplore&) = delete;
+
+  /// One control period. Returns false once the run has stopped (explorer done or time limit).
+  bool step();
+  /// Steps until the run stops; calls `progress` about once per simulated second.
+  void run(const std::function<void(const SimExplore&)>& progress = {});
+
+  [[nodiscard]] double now_s() const noexcept { return t_; }
+  [[nodiscard]] bool running() const noexcept { return reason_ == StopReason::kRunning; }
+  [[nodiscard]] ExploreSummary summary() const;
+  [[nodiscard]] const std::vector<CurvePoint>& curve() const noexcept { return curve_; }
+  [[nodiscard]] const std::vector<StampedPose>& estimated_trajectory() const noexcept { return est_traj_; }
+  [[nodiscard]] const std::vector<StampedPose>& true_trajectory() const noexcept { return true_traj_; }
+  [[nodiscard]] const std::vector<CollisionRecord>& collision_log() const noexcept { return collision_log_; }
+  [[nodiscard]] Mapper& mapper() noexcept { return mapper_; }
+  [[nodiscard]] const Explorer& explorer() const noexcept { return explorer_; }
+  [[nodiscard]] const World& world() const noexcept { return *world_; }
+  [[nodiscard]] const SimChassis& chassis() const noexcept { return chassis_; }
+  /// Current explored area [m^2] and coverage (as in the curve).
+  [[nodiscard]] CurvePoint measure() const;
+
+ private:
+  void render_sensors();
+  void drain_sync();
+  void integrate(const ApproximateTimeCore::Set& set);
+
+  std::shared_ptr<const World> world_;
+  Profile profile_;
+  ExploreSettings settings_;
+  RgbdRenderer renderer_;
+  SimChassis chassis_;
+  Mapper mapper_;
+  Explorer explorer_;
+  ApproximateTimeCore sync_;
+  TruthGrid truth_;
+  std::vector<std::uint8_t> reachable_;
+  std::size_t reachable_count_ = 0;
+  // Payloads waiting in the synchronizer, by id (moved in, moved out, never copied).
+  std::unordered_map<std::uint64_t, RgbdImage> frames_;
+  std::unordered_map<std::uint64_t, OdometryMsg> odometry_;
+  std::vector<RgbdImage> spare_images_;  ///< recycled buffers
+  std::uint64_t next_id_ = 0;
+  std::uint64_t frame_drops_ = 0, odometry_unmatched_ = 0;
+  std::unique_ptr<Clock> wall_clock_;
+  double t_ = 0.0;
+  double dt_ = 0.05;
+  double next_sensor_t_ = 0.0;
+  double next_map_t_ = 0.0;
+  double next_curve_t_ = 0.0;
+  std::uint64_t frame_counter_ = 0;
+  Pose2 pose_;          ///< the runtime's pose estimate
+  Twist odom_twist_;
+  StopReason reason_ = StopReason::kRunning;
+  std::vector<CurvePoint> curve_;
+  std::vector<CollisionRecord> collision_log_;
+  Twist last_cmd_;
+  std::vector<StampedPose> est_traj_, true_traj_;
+  double path_length_ = 0.0;
+  double target_entered_ = -1.0;
+  double t90_ = -1.0, t_paper_ = -1.0;
+  std::size_t frames_rendered_ = 0, sets_integrated_ = 0, sets_not_integrated_ = 0;
+  double wall_start_ = 0.0, wall_elapsed_ = 0.0;
+  bool map_ready_ = false;
+};
+
+}  // namespace duet::sim

@@ -1,0 +1,234 @@
+/// @file explorer.cpp
+/// Explorer: decisions (Fig. 6), global path, dynamic window (see explorer.hpp).
+#include <duet/kernels/error.hpp>
+#include <duet/runtime/explorer.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+namespace duet {
+
+namespace {
+constexpr float kPi = 3.14159265358979f;
+
+float wrap_angle(float a) {
+  while (a > kPi) a -= 2.0f * kPi;
+  while (a < -kPi) a += 2.0f * kPi;
+  return a;
+}
+
+bool same_geometry(const GridView& a, const GridView& b) {
+  return a.width == b.width && a.height == b.height && a.resolution_m == b.resolution_m &&
+         a.origin.x() == b.origin.x() && a.origin.y() == b.origin.y();
+}
+}  // namespace
+
+void validate(const ExplorerSettings& s) {
+  auto positive = [](float v, const char* name) {
+    if (!(std::isfinite(v) && v > 0.0f))
+      fail(ErrorCode::kInvalidArgument, std::string("ExplorerSettings::") + name + " must be in (0, inf), got " + std::to_string(v));
+  };
+  positive(s.goal_timeout_s, "goal_timeout_s");
+  positive(s.nominal_speed_mps, "nominal_speed_mps");
+  positive(s.stuck_timeout_s, "stuck_timeout_s");
+  if (!(s.blacklist_ttl_s > 0.0f))  // +inf allowed
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::blacklist_ttl_s must be in (0, inf], got " + std::to_string(s.blacklist_ttl_s));
+  if (s.final_retries < 0 || s.final_retries > 1000)
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::final_retries must be in [0, 1000], got " + std::to_string(s.final_retries));
+}
+
+Explorer::Explorer(const Profile& profile, const ExplorerSettings& settings)
+    : profile_(profile), settings_(settings), sectors_(observation_sectors(profile)), model_(profile.exploration.observation) {
+  validate(settings_);
+  validate(profile_.exploration.strategy);
+  validate(profile_.exploration.dwa);
+  validate(profile_.exploration.path);
+  validate(profile_.exploration.inflation);
+}
+
+void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double now_s) {
+  const GridView view(grid);
+  if (model_geometry_valid_ && same_geometry(model_.grid(), view)) {
+    (void)model_.update_grid(view);
+  } else {
+    model_.set_grid(view);
+    model_geometry_valid_ = true;
+  }
+  inflate(view, profile_.exploration.inflation, inflated_);
+  // The dynamic window's grid: unknown is an obstacle, except where the robot's body has been.
+  local_grid_ = grid;
+  const float free_l = std::min(profile_.exploration.cells.free_logodds, profile_.mapping.grid_update.min_logodds);
+  const float res = local_grid_.resolution();
+  auto clear_disc = [&](const Eigen::Vector2f& p, float r) {
+    const int rc = static_cast<int>(std::ceil(r / res));
+    const Eigen::Vector2i c = local_grid_.cell_of(p);
+    for (int dy = -rc; dy <= rc; ++dy)
+      for (int dx = -rc; dx <= rc; ++dx) {
+        const int x = c.x() + dx, y = c.y() + dy;
+        if (!local_grid_.in_bounds(x, y)) continue;
+        if ((local_grid_.cell_center(x, y) - p).norm() > r) continue;
+        float& l = local_grid_.logodds()[local_grid_.index(x, y)];
+        if (std::isnan(l)) l = free_l;
+      }
+  };
+  // The body's trail is free; so is the spot the robot was set down on, out to the dynamic
+  // window's footprint plus a cell (a robot is placed on free floor).
+  for (const Eigen::Vector2f& p : trail_) clear_disc(p, profile_.chassis.radius_m);
+  if (!trail_.empty())
+    clear_disc(trail_.front(), profile_.exploration.dwa.robot_radius_m + profile_.exploration.dwa.safety_margin_m + res);
+  InflationSettings local_settings = profile_.exploration.inflation;
+  local_settings.unknown_is_obstacle = true;
+  inflate(GridView(local_grid_), local_settings, local_);
+  have_map_ = true;
+  if (state_ == ExplorerState::kIdle) state_ = ExplorerState::kExploring;
+  wait_for_map_ = false;  // a decision that found nothing may try again on the new map
+  if (goal_) {
+    // The goal cell became an obstacle (or its inflation): abandon; else re-plan on the new map.
+    Eigen::Vector2i c;
+    const Eigen::Vector2f g(goal_->x, goal_->y);
+    if (!inflated_.cell_of(g, c) || !inflated_.traversable[inflated_.index(c.x(), c.y())]) {
+      abandon(stats_.goals_abandoned_blocked, now_s);
+    } else if (plan(robot)) {
+      ++stats_.replans;
+    } else {
+      abandon(stats_.goals_abandoned_no_path, now_s);
+    }
+  }
+}
+
+bool Explorer::plan(const Pose2& robot) {
+  const PathResult r = plan_path(inflated_, Eigen::Vector2f(robot.x, robot.y), Eigen::Vector2f(goal_->x, goal_->y),
+                                 profile_.exploration.path, path_ws_);
+  if (r.status != PathStatus::kFound) return false;
+  path_ = r.waypoints;
+  if (path_.size() == 1) path_.push_back(path_.front());
+  return true;
+}
+
+void Explorer::abandon(int& counter, double now_s) {
+  ++counter;
+  if (goal_) blacklist_.add(Eigen::Vector2f(goal_->x, goal_->y), now_s, settings_.blacklist_ttl_s);
+  goal_.reset();
+  path_.clear();
+  dwa_state_.reset();
+  stuck_since_s_ = -1.0;
+}
+
+void Explorer::decide(const Pose2& robot, double now_s) {
+  blacklist_.expire(now_s);
+  // Up to three attempts in one period: a goal without a path is blacklisted and the next one taken.
+  for (int attempt = 0; attempt < 3 && !goal_; ++attempt) {
+    ExplorationSettings s = profile_.exploration.strategy;
+    // A distinct random stream per decision, derived from the profile's seed (Procedure 1).
+    s.simulation.seed = profile_.exploration.strategy.simulation.seed * 0x9E3779B97F4A7C15ull + decision_seed_++;
+    const auto t0 = std::chrono::steady_clock::now();
+    decision_ = decide_goal(model_, inflated_, robot, sectors_, blacklist_, now_s, s, ws_);
+    if (settings_.stop_when_no_frontier && decision_.status == ExplorationStatus::kSimulatedGoal) {
+      decision_.frontier = find_frontier(inflated_, Eigen::Vector2f(robot.x, robot.y), blacklist_, now_s, s.frontier, ws_.frontier);
+      if (decision_.frontier.status == FrontierStatus::kNoFrontier) decision_.status = ExplorationStatus::kNoFrontier;
+      else if (decision_.frontier.status == FrontierStatus::kAllUnreachable) decision_.status = ExplorationStatus::kAllUnreachable;
+      else if (decision_.frontier.status == FrontierStatus::kAllBlacklisted) decision_.status = ExplorationStatus::kAllBlacklisted;
+    }
+    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ++stats_.decisions;
+    stats_.decision_time_sum_s += dt;
+    stats_.decision_time_max_s = std::max(stats_.decision_time_max_s, dt);
+    DecisionRecord rec;
+    rec.t_s = now_s;
+    rec.status = decision_.status;
+    rec.reward_bits = decision_.reward_bits;
+    rec.robot = robot;
+    rec.goal = decision_.goal;
+    rec.wall_time_s = dt;
+    rec.frontier_cells = decision_.frontier.frontier_cells;
+    float best = std::numeric_limits<float>::infinity();
+    for (const auto& c : decision_.frontier.clusters)
+      if (c.reachable) {
+        ++rec.reachable_clusters;
+        if (c.path_length_m < best) {
+          best = c.path_length_m;
+          rec.nearest_frontier = c.nearest_xy;
+        }
+      }
+    log_.push_back(rec);
+    if (!decision_.frontier.clusters.empty() || decision_.frontier.status != FrontierStatus::kNoFrontier) {
+      frontier_xy_.clear();
+      const auto& fw = ws_.frontier;
+      for (const std::uint32_t i : fw.frontier)
+        if (i < inflated_.cell_count() && i < fw.mask.size() && fw.mask[i]) frontier_xy_.push_back(inflated_.cell_center(static_cast<std::size_t>(i)));
+    }
+    if (!decision_.has_goal()) {
+      if (++no_goal_decisions_ > settings_.final_retries) {
+        state_ = ExplorerState::kDone;
+        stop_status_ = decision_.status;
+      }
+      wait_for_map_ = true;
+      return;
+    }
+    goal_ = decision_.goal;
+    if (!plan(robot)) {
+      abandon(stats_.goals_abandoned_no_path, now_s);
+      continue;
+    }
+    log_.back().planned = true;
+    if (decision_.status == ExplorationStatus::kSimulatedGoal) ++stats_.simulated_goals;
+    else ++stats_.frontier_goals;
+    no_goal_decisions_ = 0;
+    float length = 0.0f;
+    for (std::size_t i = 1; i < path_.size(); ++i) length += (path_[i] - path_[i - 1]).norm();
+    goal_deadline_s_ = now_s + settings_.goal_timeout_s + length / settings_.nominal_speed_mps;
+    dwa_state_.reset();
+    stuck_since_s_ = -1.0;
+  }
+}
+
+Twist Explorer::control(const Pose2& robot, const Twist& current, double now_s) {
+  const Eigen::Vector2f here(robot.x, robot.y);
+  if (here.allFinite() && (trail_.empty() || (trail_.back() - here).norm() >= 0.05f)) trail_.push_back(here);
+  if (!have_map_ || state_ == ExplorerState::kDone) return Twist{};
+  if (!goal_) {
+    // After a decision without a goal, wait for the next map before deciding again.
+    if (wait_for_map_) return Twist{};
+    decide(robot, now_s);
+    if (!goal_) return Twist{};
+  }
+  if (now_s > goal_deadline_s_) {
+    abandon(stats_.goals_abandoned_timeout, now_s);
+    return Twist{};
+  }
+  const DwaSettings& ds = profile_.exploration.dwa;
+  const DwaResult r = dwa_step(local_.clearance(), robot, current, path_, ds, dwa_state_, dwa_ws_);
+  switch (r.status) {
+    case DwaStatus::kGoalReached: {
+      // A simulated goal is a pose (Procedure 1: X_g): turn to its heading, within the paper's
+      // bounded angular speed, before the next decision.
+      const float err = wrap_angle(goal_->theta - robot.theta);
+      if (decision_.status == ExplorationStatus::kSimulatedGoal && std::fabs(err) > 0.2f) {
+        const float w = std::clamp(1.5f * err, -ds.mapping_max_omega_rps, ds.mapping_max_omega_rps);
+        const float dw = ds.mapping_max_alpha_rps2 * ds.control_period_s;
+        return Twist{0.0f, std::clamp(w, current.omega - dw, current.omega + dw)};
+      }
+      ++stats_.goals_reached;
+      // A frontier that is still a frontier after the robot stood at it cannot be observed
+      // from there (the inside of an obstacle behind a gap in its outline): never again.
+      if (decision_.status == ExplorationStatus::kFrontierGoal)
+        blacklist_.add(Eigen::Vector2f(goal_->x, goal_->y), now_s, std::numeric_limits<double>::infinity());
+      goal_.reset();
+      path_.clear();
+      dwa_state_.reset();
+      return Twist{};
+    }
+    case DwaStatus::kNoValidTrajectory:
+    case DwaStatus::kNoPath:
+      if (stuck_since_s_ < 0.0) stuck_since_s_ = now_s;
+      if (now_s - stuck_since_s_ > settings_.stuck_timeout_s) abandon(stats_.goals_abandoned_stuck, now_s);
+      return r.cmd;
+    default:
+      stuck_since_s_ = -1.0;
+      return r.cmd;
+  }
+}
+
+}  // namespace duet

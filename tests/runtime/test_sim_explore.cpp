@@ -1,0 +1,174 @@
+// The simulated exploration run end to end (issue 4): a small world is explored, the run is
+// repeatable for a seed whatever the thread count, and the robot does not collide.
+#include <duet/kernels/error.hpp>
+#include <duet/runtime/plot.hpp>
+#include <duet/runtime/profile.hpp>
+#include <duet/runtime/sim/sim_explore.hpp>
+#include <duet/runtime/sim/world.hpp>
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include "runtime_test_util.hpp"
+
+#include <cmath>
+#include <string>
+
+namespace {
+
+using duet_test::TempDir;
+
+// Two rooms (3.5 x 4 m and 2.5 x 4 m) joined by a 1 m door, a box in each room.
+const char* kTwoRooms = R"(name: two_rooms
+floor: {min: [0, 0], max: [6.2, 4.2]}
+start: [1.0, 1.0, 0.0]
+walls:
+  - {name: outer, points: [[0.05, 0.05], [6.15, 0.05], [6.15, 4.15], [0.05, 4.15]], closed: true}
+  - {name: inner north, points: [[3.6, 4.1], [3.6, 2.6]], thickness_m: 0.1}
+  - {name: inner south, points: [[3.6, 1.6], [3.6, 0.1]], thickness_m: 0.1}
+boxes:
+  - {name: crate, centre: [2.0, 2.8], size: [0.6, 0.6], height_m: 0.8}
+  - {name: cabinet, min: [4.8, 0.1], max: [6.1, 0.6], height_m: 1.5}
+)";
+
+duet::sim::World two_rooms() { return duet::sim::parse_world(kTwoRooms, "two_rooms.yaml"); }
+
+duet::sim::ExploreSettings settings(std::uint64_t seed, double max_time) {
+  duet::sim::ExploreSettings s;
+  s.seed = seed;
+  s.max_time_s = max_time;
+  return s;
+}
+
+}  // namespace
+
+TEST(SimExplore, ExploresASmallWorldWithoutCollision) {
+  duet::sim::SimExplore run(two_rooms(), duet::builtin_profile("dual_kinect_kobuki"), settings(1, 150.0));
+  run.run();
+  const auto s = run.summary();
+  EXPECT_GE(s.coverage, 0.95) << "explored " << s.explored_area_m2 << " m^2 of " << s.reachable_free_area_m2;
+  EXPECT_EQ(s.collisions, 0u);
+  EXPECT_GT(s.path_length_m, 2.0);
+  EXPECT_GT(s.explorer.goals_reached, 0);
+  EXPECT_GT(s.sets_integrated, 10u);
+  EXPECT_EQ(s.frame_drops, 0u);
+  // The curve is monotone in time and its area ends at the summary's.
+  ASSERT_FALSE(run.curve().empty());
+  for (std::size_t i = 1; i < run.curve().size(); ++i) EXPECT_GT(run.curve()[i].t_s, run.curve()[i - 1].t_s);
+  EXPECT_NEAR(run.curve().back().area_m2, s.explored_area_m2, 1e-9);
+  // The reachable free area is about the rooms' floor minus walls, boxes and the robot's margin.
+  EXPECT_GT(s.reachable_free_area_m2, 18.0);
+  EXPECT_LT(s.reachable_free_area_m2, 25.0);
+  // The map's explored area is in the same range (it also counts wall cells).
+  EXPECT_GT(s.explored_area_m2, 0.9 * s.reachable_free_area_m2);
+  // The estimated trajectory is wheel odometry: near the truth, but not equal to it.
+  const auto& est = run.estimated_trajectory();
+  const auto& tru = run.true_trajectory();
+  ASSERT_EQ(est.size(), tru.size());
+  double max_err = 0.0;
+  for (std::size_t i = 0; i < est.size(); ++i)
+    max_err = std::max(max_err, static_cast<double>(std::hypot(est[i].pose.x - tru[i].pose.x, est[i].pose.y - tru[i].pose.y)));
+  EXPECT_GT(max_err, 0.0);
+  EXPECT_LT(max_err, 0.5);
+}
+
+TEST(SimExplore, SameSeedSameTrajectoryWithOneAndTwoThreads) {
+  auto trajectory = [](int threads) {
+    tbb::task_arena arena(threads);
+    std::vector<duet::sim::StampedPose> out;
+    duet::sim::ExploreSummary sum;
+    arena.execute([&] {
+      duet::sim::SimExplore run(two_rooms(), duet::builtin_profile("dual_kinect_kobuki"), settings(7, 40.0));
+      run.run();
+      out = run.true_trajectory();
+      sum = run.summary();
+    });
+    return std::make_pair(out, sum);
+  };
+  const auto [a, sa] = trajectory(1);
+  const auto [b, sb] = trajectory(2);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].pose.x, b[i].pose.x) << "step " << i;
+    ASSERT_EQ(a[i].pose.y, b[i].pose.y) << "step " << i;
+    ASSERT_EQ(a[i].pose.theta, b[i].pose.theta) << "step " << i;
+  }
+  EXPECT_EQ(sa.explored_area_m2, sb.explored_area_m2);
+  EXPECT_EQ(sa.explorer.decisions, sb.explorer.decisions);
+  // And a different seed gives a different run (the noise and Procedure 1 are seeded).
+  tbb::task_arena arena(2);
+  arena.execute([&] {
+    duet::sim::SimExplore other(two_rooms(), duet::builtin_profile("dual_kinect_kobuki"), settings(8, 40.0));
+    other.run();
+    const auto& c = other.true_trajectory();
+    bool differs = c.size() != a.size();
+    for (std::size_t i = 0; !differs && i < c.size(); ++i) differs = c[i].pose.x != a[i].pose.x || c[i].pose.y != a[i].pose.y;
+    EXPECT_TRUE(differs);
+  });
+}
+
+TEST(SimExplore, NoCollisionOverFiveSeeds) {
+  for (std::uint64_t seed = 11; seed < 16; ++seed) {
+    duet::sim::SimExplore run(two_rooms(), duet::builtin_profile(seed % 2 ? "dual_kinect_kobuki" : "single_kinect_kobuki"),
+                              settings(seed, 90.0));
+    run.run();
+    const auto s = run.summary();
+    EXPECT_EQ(s.collisions, 0u) << "seed " << seed << " (" << s.profile << ")";
+    EXPECT_GT(s.coverage, 0.5) << "seed " << seed;
+  }
+}
+
+TEST(SimExplore, StopsAtTheTimeLimitAndSaysWhy) {
+  duet::sim::SimExplore run(two_rooms(), duet::builtin_profile("dual_kinect_kobuki"), settings(3, 5.0));
+  run.run();
+  const auto s = run.summary();
+  EXPECT_EQ(s.stop_reason, duet::sim::StopReason::kTimeLimit);
+  EXPECT_NEAR(s.sim_time_s, 5.0, 1e-6);
+  EXPECT_FALSE(run.step());  // stopped stays stopped
+}
+
+TEST(SimExplore, InvalidSettingsAreErrorsThatNameTheField) {
+  auto message = [](const duet::sim::ExploreSettings& s) -> std::string {
+    try {
+      duet::sim::SimExplore run(two_rooms(), duet::builtin_profile("dual_kinect_kobuki"), s);
+    } catch (const duet::Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  auto s = settings(1, 10.0);
+  s.max_time_s = -1.0;
+  EXPECT_NE(message(s).find("max_time_s"), std::string::npos);
+  s = settings(1, 10.0);
+  s.map_rate_hz = 50.0;  // above the control rate
+  EXPECT_NE(message(s).find("map_rate_hz"), std::string::npos);
+  s = settings(1, 10.0);
+  s.sensor_rate_hz = 0.5;  // below the map rate
+  EXPECT_NE(message(s).find("sensor_rate_hz"), std::string::npos);
+  // A world whose start collides is refused by the chassis.
+  auto w = two_rooms();
+  w.start = duet::Pose2{0.12f, 1.0f, 0.0f};
+  EXPECT_THROW(duet::sim::SimExplore(w, duet::builtin_profile("dual_kinect_kobuki"), settings(1, 10.0)), duet::Error);
+}
+
+TEST(Plot, WritesAPngAndRejectsEmptyPlots) {
+  TempDir dir;
+  duet::PlotSeries s;
+  s.label = "dual";
+  s.x = {0, 1, 2, NAN, 4};
+  s.y = {0, 2, 3, 4, 5};
+  duet::PlotOptions o;
+  o.title = "t";
+  o.markers = {{"paper", 3.0, 4.0, {200, 0, 0}}};
+  duet::write_plot_png(dir / "a.png", {s}, o);
+  const std::string png = duet_test::slurp(dir / "a.png");
+  ASSERT_GT(png.size(), 1000u);
+  EXPECT_EQ(png.substr(1, 3), "PNG");
+  duet::PlotSeries empty;
+  EXPECT_THROW(duet::write_plot_png(dir / "b.png", {empty}, o), duet::Error);
+  duet::PlotSeries bad = s;
+  bad.y.pop_back();
+  EXPECT_THROW(duet::write_plot_png(dir / "c.png", {bad}, o), duet::Error);
+  o.width_px = 10;
+  EXPECT_THROW(duet::write_plot_png(dir / "d.png", {s}, o), duet::Error);
+}
