@@ -75,7 +75,10 @@ void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double 
   };
   // The body's trail is free; so is the spot the robot was set down on, out to the dynamic
   // window's footprint plus a cell (a robot is placed on free floor).
-  for (const Eigen::Vector2f& p : trail_) clear_disc(p, profile_.chassis.radius_m);
+  // Only cells wholly under the body (centre within radius - half a cell diagonal): an unseen
+  // obstacle corner at the body's edge must stay an obstacle, or the trail creeps into it.
+  const float body_cells_r = profile_.chassis.radius_m - 0.7072f * res;
+  for (const Eigen::Vector2f& p : trail_) clear_disc(p, body_cells_r);
   if (!trail_.empty())
     clear_disc(trail_.front(), profile_.exploration.dwa.robot_radius_m + profile_.exploration.dwa.safety_margin_m + res);
   InflationSettings local_settings = profile_.exploration.inflation;
@@ -202,17 +205,18 @@ Twist Explorer::control(const Pose2& robot, const Twist& current, double now_s) 
   const DwaResult r = dwa_step(local_.clearance(), robot, current, path_, ds, dwa_state_, dwa_ws_);
   switch (r.status) {
     case DwaStatus::kGoalReached: {
-      // A simulated goal is a pose (Procedure 1: X_g): turn to its heading, within the paper's
-      // bounded angular speed, before the next decision.
+      // A goal is a pose: Procedure 1's X_g, or a frontier goal facing the unknown side. Turn to
+      // its heading, within the paper's bounded angular speed, before the next decision - the
+      // sensors must look at what the goal was chosen for.
       const float err = wrap_angle(goal_->theta - robot.theta);
-      if (decision_.status == ExplorationStatus::kSimulatedGoal && std::fabs(err) > 0.2f) {
+      if (std::fabs(err) > 0.2f) {
         const float w = std::clamp(1.5f * err, -ds.mapping_max_omega_rps, ds.mapping_max_omega_rps);
         const float dw = ds.mapping_max_alpha_rps2 * ds.control_period_s;
         return Twist{0.0f, std::clamp(w, current.omega - dw, current.omega + dw)};
       }
       ++stats_.goals_reached;
-      // A frontier that is still a frontier after the robot stood at it cannot be observed
-      // from there (the inside of an obstacle behind a gap in its outline): never again.
+      // A frontier that is still a frontier after the robot stood at it and looked at it cannot
+      // be observed from there (the inside of an obstacle behind a gap in its outline): never again.
       if (decision_.status == ExplorationStatus::kFrontierGoal)
         blacklist_.add(Eigen::Vector2f(goal_->x, goal_->y), now_s, std::numeric_limits<double>::infinity());
       goal_.reset();

@@ -165,3 +165,98 @@ TEST(DuetCli, ProfileCommand) {
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("broken.yaml"), std::string::npos) << r.output;
 }
+
+// ---- duet explore / duet compare -----------------------------------------------------------
+
+namespace {
+
+const char* kRoomWorld = R"(name: room
+floor: {min: [0, 0], max: [4.2, 3.2]}
+start: [1.0, 1.0, 0.0]
+walls:
+  - {points: [[0.05, 0.05], [4.15, 0.05], [4.15, 3.15], [0.05, 3.15]], closed: true}
+boxes:
+  - {name: crate, centre: [2.8, 2.0], size: [0.5, 0.5], height_m: 0.8}
+)";
+
+fs::path write_file(const fs::path& dir, const std::string& name, const std::string& text) {
+  std::ofstream(dir / name) << text;
+  return dir / name;
+}
+
+}  // namespace
+
+TEST(DuetCli, ExploresAWorldAndWritesEveryOutput) {
+  const fs::path dir = temp_dir("explore");
+  const fs::path world = write_file(dir, "room.yaml", kRoomWorld);
+  const CliRun r = run("explore --world " + world.string() + " --max-time 30 --seed 2 --out " + (dir / "out").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("coverage"), std::string::npos) << r.output;  // the progress line
+  EXPECT_NE(r.output.find("real time"), std::string::npos) << r.output;
+  const fs::path out = dir / "out";
+  for (const char* f : {"cloud.pcd", "cloud.ply", "grid.yaml", "grid.pgm", "grid.png", "trajectory.tum",
+                        "trajectory_true.tum", "curve.csv", "curve.png", "summary.json", "log.json"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(s["world"], "room");
+  EXPECT_EQ(s["profile"], "dual_kinect_kobuki");
+  EXPECT_EQ(s["seed"], 2);
+  EXPECT_EQ(s["collisions"], 0);
+  EXPECT_GT(s["coverage"].get<double>(), 0.5);
+  EXPECT_GT(s["explored_area_m2"].get<double>(), 4.0);
+  EXPECT_GT(s["path_length_m"].get<double>(), 0.5);
+  EXPECT_GT(s["decisions"]["count"].get<int>(), 0);
+  for (const char* k : {"t90_s", "t_31m2_s", "target_region_entered_s", "stop_reason", "explorer_status", "wall_time_s"})
+    EXPECT_TRUE(s.contains(k)) << k;
+  EXPECT_GT(duet::read_pcd(out / "cloud.pcd").size(), 1000u);
+  EXPECT_GT(duet::read_map_server(out / "grid.yaml").known_cells(), 1000u);
+  // TUM trajectories: one pose per control period (20 Hz), 8 columns.
+  std::ifstream tum(out / "trajectory.tum");
+  std::string line;
+  int poses = 0;
+  while (std::getline(tum, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    ++poses;
+    double v[8];
+    EXPECT_EQ(std::sscanf(line.c_str(), "%lf %lf %lf %lf %lf %lf %lf %lf", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &v[6], &v[7]), 8)
+        << line;
+  }
+  EXPECT_GE(poses, 20 * 30);
+}
+
+TEST(DuetCli, ExploreErrorsNameTheFileAndTheProblem) {
+  const fs::path dir = temp_dir("explore-errors");
+  const fs::path bad_world = write_file(dir, "bad_world.yaml", "name: x\nfloor: {min: [0, 0], max: [4, 3]}\nstart: [1, 1]\n");
+  CliRun r = run("explore -q --world " + bad_world.string() + " --out " + (dir / "o").string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("bad_world.yaml"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("start"), std::string::npos) << r.output;
+  const fs::path world = write_file(dir, "room.yaml", kRoomWorld);
+  const fs::path bad_profile = write_file(dir, "bad_profile.yaml", "name: p\nchassis: 3\n");
+  r = run("explore -q --world " + world.string() + " --profile " + bad_profile.string() + " --out " + (dir / "o").string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("bad_profile.yaml"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("chassis"), std::string::npos) << r.output;
+  r = run("explore -q --world no_such_world --out " + (dir / "o").string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("no_such_world"), std::string::npos) << r.output;
+  r = run("explore -q --world lab --sensor-rate fast --out " + (dir / "o").string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("--sensor-rate"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "o" / "summary.json"));
+}
+
+TEST(DuetCli, CompareRunsBothProfilesAndPlotsThem) {
+  const fs::path dir = temp_dir("compare");
+  const fs::path world = write_file(dir, "room.yaml", kRoomWorld);
+  const CliRun r = run("compare -q --world " + world.string() + " --seeds 1 --max-time 15 --out " + (dir / "out").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "out" / "compare.png"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "compare.csv"));
+  const auto j = nlohmann::json::parse(std::ifstream(dir / "out" / "compare.json"));
+  ASSERT_EQ(j["runs"].size(), 2u);
+  EXPECT_EQ(j["runs"][0]["profile"], "dual_kinect_kobuki");
+  EXPECT_EQ(j["runs"][1]["profile"], "single_kinect_kobuki");
+  EXPECT_EQ(j["mean"]["dual"]["runs"], 1);
+  EXPECT_EQ(j["mean"]["single"]["runs"], 1);
+}

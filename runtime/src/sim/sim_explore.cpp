@@ -46,18 +46,14 @@ Profile seeded(Profile p, std::uint64_t seed) {
 
 double sensor_rate(const ExploreSettings& s) { return s.sensor_rate_hz > 0.0 ? s.sensor_rate_hz : s.map_rate_hz; }
 
-ApproximateTimeSettings sync_settings(const Profile& profile, const ExploreSettings& s) {
-  ApproximateTimeSettings a = s.sync;
-  const double odom_rate = profile.chassis.odometry_rate_hz;
-  const double rate = sensor_rate(s);
-  // The odometry stream runs at 50 Hz against sensors at `rate`: hold at least two sensor
-  // periods of it so that overflow never takes the message a set needs.
-  a.queue_size = std::max<std::size_t>(a.queue_size, static_cast<std::size_t>(std::ceil(2.0 * odom_rate / rate)) + 2);
-  // True lower bounds on the stamp intervals let sets be emitted at once (no waiting for the
-  // next frame to prove optimality).
-  a.inter_message_lower_bounds_s.assign(profile.sensors.size(), 0.9 / rate);
-  a.inter_message_lower_bounds_s.push_back(0.9 / odom_rate);
-  return a;
+RuntimeSettings runtime_settings(const ExploreSettings& s) {
+  RuntimeSettings r;
+  r.control_rate_hz = s.control_rate_hz;
+  r.map_rate_hz = s.map_rate_hz;
+  r.sensor_rate_hz = sensor_rate(s);
+  r.explorer = s.explorer;
+  r.sync = s.sync;
+  return r;
 }
 
 }  // namespace
@@ -92,6 +88,40 @@ void validate(const ExploreSettings& s) {
   validate(s.sync);
 }
 
+SimRgbdSensor::SimRgbdSensor(const RgbdRenderer& renderer, const SimChassis& chassis, SensorProfile sensor, double rate_hz,
+                             std::uint64_t seed)
+    : renderer_(renderer), chassis_(chassis), sensor_(std::move(sensor)), period_s_(0.0), seed_(seed) {
+  if (!(std::isfinite(rate_hz) && rate_hz > 0.0 && rate_hz <= 1000.0))
+    fail(ErrorCode::kInvalidArgument, "SimRgbdSensor '" + sensor_.name + "': rate_hz must be in (0, 1000], got " + std::to_string(rate_hz));
+  period_s_ = 1.0 / rate_hz;
+}
+
+bool SimRgbdSensor::capture(double now_s) {
+  if (now_s + 1e-9 < next_t_) return false;
+  StampedRgbd f;
+  f.stamp_s = now_s;
+  if (!spare_.empty()) {
+    f.image = std::move(spare_.back());
+    spare_.pop_back();
+  }
+  renderer_.render(sensor_, to_iso(chassis_.true_pose()) * sensor_.T_robot_optical(), mix(seed_ + 0x100000001B3ull * rendered_),
+                   f.image);
+  ++rendered_;
+  out_.push_back(std::move(f));
+  while (next_t_ <= now_s + 1e-9) next_t_ += period_s_;
+  return true;
+}
+
+std::vector<StampedRgbd> SimRgbdSensor::take_frames() {
+  std::vector<StampedRgbd> out;
+  out.swap(out_);
+  return out;
+}
+
+void SimRgbdSensor::recycle(RgbdImage&& image) {
+  if (spare_.size() < 4) spare_.push_back(std::move(image));
+}
+
 SimExplore::SimExplore(World world, Profile profile, ExploreSettings settings)
     : world_([&] {
         validate(world, world.source.empty() ? "world" : world.source);
@@ -100,13 +130,16 @@ SimExplore::SimExplore(World world, Profile profile, ExploreSettings settings)
       profile_(seeded(std::move(profile), settings.seed)),
       settings_((validate(settings), settings)),
       renderer_(*world_, settings_.render),
-      chassis_(world_, chassis_settings(profile_, settings_), world_->start, ChassisBody::from_profile(profile_.chassis)),
-      mapper_(profile_.mapping),
-      explorer_(profile_, settings_.explorer),
-      sync_(profile_.sensors.size() + 1, sync_settings(profile_, settings_)) {
+      chassis_(world_, chassis_settings(profile_, settings_), world_->start, ChassisBody::from_profile(profile_.chassis)) {
   validate(profile_, profile_.name);
+  std::vector<RgbdSensorInterface*> ifaces;
+  for (std::size_t i = 0; i < profile_.sensors.size(); ++i) {
+    sensors_.push_back(std::make_unique<SimRgbdSensor>(renderer_, chassis_, profile_.sensors[i], sensor_rate(settings_),
+                                                       mix(settings_.seed * 0x9E3779B97F4A7C15ull + i)));
+    ifaces.push_back(sensors_.back().get());
+  }
+  runtime_ = std::make_unique<ExplorationRuntime>(profile_, chassis_, ifaces, runtime_settings(settings_));
   dt_ = 1.0 / settings_.control_rate_hz;
-  pose_ = world_->start;
   truth_ = rasterize(*world_, settings_.coverage_resolution_m, 0.0f, 0.6f);
   float range = 0.0f;
   for (const auto& s : profile_.sensors) range = std::max(range, s.max_depth_m);
@@ -115,85 +148,15 @@ SimExplore::SimExplore(World world, Profile profile, ExploreSettings settings)
   if (settings_.realtime) wall_clock_ = std::make_unique<SteadyClock>(1.0);
   wall_start_ = wall_now();
   true_traj_.push_back({0.0, chassis_.true_pose()});
-  est_traj_.push_back({0.0, pose_});
+  est_traj_.push_back({0.0, world_->start});
 }
 
 SimExplore::~SimExplore() = default;
 
-void SimExplore::render_sensors() {
-  const Eigen::Isometry3f T_world_robot = to_iso(chassis_.true_pose());
-  for (std::size_t i = 0; i < profile_.sensors.size(); ++i) {
-    const SensorProfile& sp = profile_.sensors[i];
-    RgbdImage img;
-    if (!spare_images_.empty()) {
-      img = std::move(spare_images_.back());
-      spare_images_.pop_back();
-    }
-    const std::uint64_t seed = mix(settings_.seed * 0x100000001B3ull + frame_counter_ * 64 + i);
-    renderer_.render(sp, T_world_robot * sp.T_robot_optical(), seed, img);
-    ++frames_rendered_;
-    const std::uint64_t id = next_id_++;
-    frames_.emplace(id, std::move(img));
-    sync_.add(i, t_, id);
-  }
-  ++frame_counter_;
-}
-
-void SimExplore::integrate(const ApproximateTimeCore::Set& set) {
-  const std::size_t n = profile_.sensors.size();
-  std::vector<RgbdImage> images(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    auto it = frames_.find(set.ids[i]);
-    if (it == frames_.end()) fail(ErrorCode::kInternal, "synchronizer returned an unknown frame id");
-    images[i] = std::move(it->second);
-    frames_.erase(it);
-  }
-  auto ot = odometry_.find(set.ids[n]);
-  if (ot == odometry_.end()) fail(ErrorCode::kInternal, "synchronizer returned an unknown odometry id");
-  const OdometryMsg odom = ot->second;
-  odometry_.erase(ot);
-  const double stamp = set.stamps_s[n];
-  if (stamp + 1e-9 >= next_map_t_) {
-    std::vector<SensorFrame> frames;
-    frames.reserve(n);
-    for (std::size_t i = 0; i < n; ++i)
-      frames.push_back(frame_view(images[i], profile_.sensors[i], profile_.sensors[i].T_robot_optical()));
-    // The frames were rendered at the true pose; the mapper gets the runtime's estimate at the
-    // frames' time: the synchronized odometry (or, for debugging, the truth).
-    const Pose2 at = settings_.use_true_pose ? chassis_.true_pose() : odom.pose;
-    mapper_.integrate(frames, to_iso(at));
-    explorer_.update_map(mapper_.grid(), pose_, t_);
-    map_ready_ = true;
-    ++sets_integrated_;
-    while (next_map_t_ <= stamp + 1e-9) next_map_t_ += 1.0 / settings_.map_rate_hz;
-  } else {
-    ++sets_not_integrated_;
-  }
-  for (auto& img : images) spare_images_.push_back(std::move(img));
-}
-
-void SimExplore::drain_sync() {
-  for (const auto& set : sync_.take_sets()) integrate(set);
-  const std::size_t n = profile_.sensors.size();
-  for (const auto& d : sync_.take_drops()) {
-    if (d.stream < n) {
-      ++frame_drops_;
-      auto it = frames_.find(d.id);
-      if (it != frames_.end()) {
-        spare_images_.push_back(std::move(it->second));
-        frames_.erase(it);
-      }
-    } else {
-      ++odometry_unmatched_;
-      odometry_.erase(d.id);
-    }
-  }
-}
-
 CurvePoint SimExplore::measure() const {
   CurvePoint p;
   p.t_s = t_;
-  const OccupancyGrid& g = mapper_.grid();
+  const OccupancyGrid& g = runtime_->mapper().grid();
   const CellThresholds& th = profile_.exploration.cells;
   std::size_t known = 0;
   for (const float l : g.logodds())
@@ -217,36 +180,20 @@ bool SimExplore::step() {
   const double t_next = t_ + dt_;
   const std::size_t collisions_before = chassis_.collisions();
   chassis_.advance(dt_);
-  if (chassis_.collisions() > collisions_before) collision_log_.push_back({t_next, chassis_.true_pose(), last_cmd_});
   t_ = t_next;
-  const std::size_t n = profile_.sensors.size();
-  for (OdometryMsg& m : chassis_.take_odometry()) {
-    pose_ = m.pose;
-    odom_twist_ = m.twist;
-    const std::uint64_t id = next_id_++;
-    const double stamp = m.stamp_s;
-    odometry_.emplace(id, m);
-    sync_.add(n, stamp, id);
-  }
-  if (settings_.use_true_pose) pose_ = chassis_.true_pose();
+  if (chassis_.collisions() > collisions_before) collision_log_.push_back({t_, chassis_.true_pose(), runtime_->last_command()});
   // 2. Sensors, when due (stamped with this period's end, where the true pose is).
-  if (t_ + 1e-9 >= next_sensor_t_) {
-    render_sensors();
-    const double period = 1.0 / sensor_rate(settings_);
-    while (next_sensor_t_ <= t_ + 1e-9) next_sensor_t_ += period;
-  }
-  // 3. Synchronized sets -> mapper (1 Hz) -> explorer's map.
-  drain_sync();
-  // 4-5. Control at 20 Hz on the pose estimate.
-  const Twist cmd = explorer_.control(pose_, odom_twist_, t_);
-  chassis_.command(cmd);
-  last_cmd_ = cmd;
+  for (auto& s : sensors_) (void)s->capture(t_);
+  // 3. The robot's runtime: synchronizer -> mapper -> explorer -> command.
+  runtime_->override_pose(settings_.use_true_pose ? std::optional<Pose2>(chassis_.true_pose()) : std::nullopt);
+  runtime_->tick(t_);
 
+  // 4. Scoring.
   const Pose2 truth = chassis_.true_pose();
   const Pose2 last = true_traj_.back().pose;
   path_length_ += std::hypot(truth.x - last.x, truth.y - last.y);
   true_traj_.push_back({t_, truth});
-  est_traj_.push_back({t_, pose_});
+  est_traj_.push_back({t_, runtime_->pose()});
   if (target_entered_ < 0.0 && world_->target_region && world_->target_region->contains({truth.x, truth.y}))
     target_entered_ = t_;
   if (t_ + 1e-9 >= next_curve_t_) {
@@ -256,7 +203,7 @@ bool SimExplore::step() {
     if (t_paper_ < 0.0 && p.area_m2 >= kPaperAreaM2) t_paper_ = t_;
     next_curve_t_ += settings_.curve_period_s;
   }
-  if (explorer_.state() == ExplorerState::kDone) reason_ = StopReason::kExplorerDone;
+  if (runtime_->explorer().state() == ExplorerState::kDone) reason_ = StopReason::kExplorerDone;
   else if (t_ + 1e-9 >= settings_.max_time_s) reason_ = StopReason::kTimeLimit;
   if (reason_ != StopReason::kRunning) {
     const CurvePoint p = measure();
@@ -284,7 +231,8 @@ ExploreSummary SimExplore::summary() const {
   s.profile = profile_.name;
   s.seed = settings_.seed;
   s.stop_reason = reason_;
-  if (explorer_.state() == ExplorerState::kDone) s.explorer_status = duet::to_string(explorer_.stop_status());
+  const Explorer& ex = runtime_->explorer();
+  if (ex.state() == ExplorerState::kDone) s.explorer_status = duet::to_string(ex.stop_status());
   s.sim_time_s = t_;
   s.wall_time_s = wall_elapsed_;
   const CurvePoint p = measure();
@@ -296,12 +244,13 @@ ExploreSummary SimExplore::summary() const {
   s.target_entered_s = target_entered_;
   s.path_length_m = path_length_;
   s.collisions = chassis_.collisions();
-  s.explorer = explorer_.stats();
-  s.frames_rendered = frames_rendered_;
-  s.sets_integrated = sets_integrated_;
-  s.sets_not_integrated = sets_not_integrated_;
-  s.frame_drops = frame_drops_;
-  s.odometry_unmatched = odometry_unmatched_;
+  s.explorer = ex.stats();
+  for (const auto& sensor : sensors_) s.frames_rendered += sensor->frames_rendered();
+  const RuntimeStats& rs = runtime_->stats();
+  s.sets_integrated = rs.sets_integrated;
+  s.sets_not_integrated = rs.sets_not_integrated;
+  s.frame_drops = rs.frame_drops;
+  s.odometry_unmatched = rs.odometry_unmatched;
   const Pose2 tp = chassis_.true_pose();
   s.odometry_error_m = std::hypot(chassis_.odometry_pose().x - tp.x, chassis_.odometry_pose().y - tp.y);
   return s;

@@ -7,8 +7,9 @@
 ///
 /// Goal life cycle (the paper: "a new goal when the last is reached or its time limit passes"):
 ///  - a decision is taken when there is no goal (start, goal reached, goal abandoned);
-///  - a frontier goal, once reached, is blacklisted for good (if it is still a frontier the
-///    unknown cells behind it cannot be seen from there);
+///  - at a goal the robot turns to the goal's heading (Procedure 1's X_g, or facing the unknown
+///    side of a frontier); a frontier goal, once reached and looked at, is blacklisted for good
+///    (if it is still a frontier the unknown cells behind it cannot be seen from there);
 ///  - a goal is abandoned, and blacklisted for blacklist_ttl_s, when its time limit passes
 ///    (goal_timeout_s + path length / nominal speed), when no path to it exists, or when the
 ///    dynamic window finds no admissible trajectory (or keeps recovering) for too long;

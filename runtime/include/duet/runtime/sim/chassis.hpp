@@ -41,6 +41,7 @@
 /// may run concurrently with each other, not with command()/advance()/take_odometry().
 #include <duet/kernels/motion_model.hpp>
 #include <duet/runtime/profile.hpp>
+#include <duet/runtime/robot_io.hpp>
 #include <duet/runtime/sim/world.hpp>
 
 #include <cstddef>
@@ -114,14 +115,9 @@ struct ChassisBody {
 };
 void validate(const ChassisBody& body);
 
-/// One wheel odometry message.
-struct OdometryMsg {
-  double stamp_s = 0.0;  ///< [s] on the simulation clock
-  Pose2 pose;            ///< odometry pose (world frame at the start) [m, rad]
-  Twist twist;           ///< mean measured twist over the last odometry period [m/s, rad/s]
-};
+using OdometryMsg = duet::OdometryMsg;  // robot_io.hpp
 
-class SimChassis {
+class SimChassis final : public ChassisInterface {
  public:
   /// `world`: shared (kept alive by the chassis; the renderer shares it), validated by the
   /// caller (sim::validate). `start`: the true and odometry start pose; it must not collide.
@@ -133,7 +129,7 @@ class SimChassis {
   /// The latest velocity command, held until replaced (clamped to the limits in advance()).
   /// Any call - even with the same twist - releases a collision stop. A non-finite component
   /// is treated as a stop command (0, 0) and counted in invalid_commands().
-  void command(const Twist& cmd);
+  void command(const Twist& cmd) override;
 
   /// Moves time on by dt_s [s], finite, in [0, 3600]: runs every physics step that ends at or
   /// before the new time (now_s()), queueing the odometry messages that fall due.
@@ -160,7 +156,7 @@ class SimChassis {
   [[nodiscard]] bool stopped_by_collision() const noexcept { return blocked_; }
   [[nodiscard]] std::size_t invalid_commands() const noexcept { return invalid_commands_; }
   /// Odometry messages produced since the last call, in time order.
-  [[nodiscard]] std::vector<OdometryMsg> take_odometry();
+  [[nodiscard]] std::vector<OdometryMsg> take_odometry() override;
 
   [[nodiscard]] const ChassisSimSettings& settings() const noexcept { return settings_; }
   [[nodiscard]] const ChassisBody& body() const noexcept { return body_; }

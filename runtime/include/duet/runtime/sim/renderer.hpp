@@ -23,6 +23,7 @@
 /// order or earlier frames. Callers should give each sensor and each frame its own seed.
 #include <duet/kernels/back_projection.hpp>
 #include <duet/runtime/profile.hpp>
+#include <duet/runtime/robot_io.hpp>
 #include <duet/runtime/sim/world.hpp>
 
 #include <Eigen/Geometry>
@@ -117,20 +118,9 @@ struct WorldMesh {
 
 /// One rendered RGB-D frame. Buffers are reused across render() calls (no reallocation when
 /// the size does not change).
-struct RgbdImage {
-  int width = 0;
-  int height = 0;
-  std::vector<std::uint16_t> depth;  ///< width * height raw depth units, row-major; 0 = no return
-  std::vector<std::uint8_t> rgb;     ///< width * height * 3, R G B; empty after render_depth_only()
-};
+using RgbdImage = duet::RgbdImage;  // robot_io.hpp
 
-/// The views of `image` the mapper takes (DepthImageView kU16 in sensor.depth_units_per_m,
-/// ColorImageView RGB - null data when the image has no colour - the sensor's intrinsics and
-/// T_robot_camera = T_robot_optical). The views point into `image`: keep it alive and
-/// unchanged while they are used. Throws duet::Error(kInvalidArgument) when the image's size
-/// does not match the sensor's intrinsics or its buffers.
-[[nodiscard]] SensorFrame frame_view(const RgbdImage& image, const SensorProfile& sensor,
-                                     const Eigen::Isometry3f& T_robot_optical);
+using duet::frame_view;  // robot_io.hpp
 
 /// Ray-traces RGB-D frames of a World with Embree.
 ///

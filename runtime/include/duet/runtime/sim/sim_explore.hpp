@@ -6,19 +6,17 @@
 /// the mapping kernels, the explorer and the controller on the exploration kernels - on a
 /// clock that is simulated (lockstep, default) or the wall clock (realtime).
 ///
-/// Scheduler (paper §4.2, DESIGN.md §3), one loop iteration per control period (20 Hz):
+/// The simulator implements the robot interfaces of robot_io.hpp (SimChassis is the
+/// ChassisInterface, SimRgbdSensor the RgbdSensorInterface) and drives the same
+/// ExplorationRuntime a real robot runs. One loop iteration per control period (20 Hz):
 ///  1. the chassis advances one period (physics at 5 ms, odometry messages at 50 Hz);
 ///  2. the sensors render when their period is due (sensor_rate_hz; default: the map rate,
 ///     i.e. only the frames the pipeline consumes), stamped with the render time, posed by the
 ///     TRUE robot pose (the world does not know about odometry drift);
-///  3. frames and odometry go through the synchronizer (streams: sensor 0..n-1, odometry); each
-///     emitted set whose stamp reaches the next map time is integrated by the mapper at the
-///     pose of its odometry message (1 Hz), and the explorer gets the new grid; sets between
-///     map times are counted as not integrated (frames for visual odometry, not built yet);
-///  4. pose (20 Hz): the noisy wheel odometry - the true pose only with use_true_pose
-///     (a debugging option, never the default);
-///  5. control (20 Hz): the explorer decides goals (a new one when the last is reached or its
-///     time limit passes) and the dynamic window's command goes to the chassis.
+///  3. ExplorationRuntime::tick(): synchronizer -> mapper (1 Hz) -> explorer -> command; the
+///     pose is the noisy wheel odometry - the true pose only with use_true_pose (a debugging
+///     option, never the default);
+///  4. the run is scored: coverage, time-area curve, collisions, target region.
 /// Frames: the odometry starts at the world's start pose, so the map frame is the world frame
 /// up to odometry drift; coverage is measured by looking up the world's reachable free cells
 /// in the map.
@@ -28,6 +26,7 @@
 /// Thread safety: one SimExplore per thread of calls; it runs TBB-parallel kernels in the
 /// caller's task arena.
 #include <duet/kernels/grid.hpp>
+#include <duet/runtime/exploration_runtime.hpp>
 #include <duet/runtime/explorer.hpp>
 #include <duet/runtime/mapper.hpp>
 #include <duet/runtime/profile.hpp>
@@ -119,6 +118,32 @@ struct StampedPose {
   Pose2 pose;
 };
 
+/// A simulated RGB-D sensor on a SimChassis: renders the world from the chassis' true pose
+/// when its period is due (capture()), and publishes the frame through the
+/// RgbdSensorInterface. Frame noise is seeded from (seed, frame index).
+class SimRgbdSensor final : public RgbdSensorInterface {
+ public:
+  /// `renderer` and `chassis` must outlive the sensor; rate_hz in (0, 1000].
+  SimRgbdSensor(const RgbdRenderer& renderer, const SimChassis& chassis, SensorProfile sensor, double rate_hz,
+                std::uint64_t seed);
+  /// Renders a frame stamped now_s if one is due (the first at t = 0). Returns true if it rendered.
+  bool capture(double now_s);
+  [[nodiscard]] std::vector<StampedRgbd> take_frames() override;
+  void recycle(RgbdImage&& image) override;
+  [[nodiscard]] std::size_t frames_rendered() const noexcept { return rendered_; }
+
+ private:
+  const RgbdRenderer& renderer_;
+  const SimChassis& chassis_;
+  SensorProfile sensor_;
+  double period_s_;
+  double next_t_ = 0.0;
+  std::uint64_t seed_;
+  std::size_t rendered_ = 0;
+  std::vector<StampedRgbd> out_;
+  std::vector<RgbdImage> spare_;
+};
+
 class SimExplore {
  public:
   /// Builds the renderer, the chassis, the mapper and the explorer. Throws duet::Error for an
@@ -140,55 +165,37 @@ class SimExplore {
   [[nodiscard]] const std::vector<StampedPose>& estimated_trajectory() const noexcept { return est_traj_; }
   [[nodiscard]] const std::vector<StampedPose>& true_trajectory() const noexcept { return true_traj_; }
   [[nodiscard]] const std::vector<CollisionRecord>& collision_log() const noexcept { return collision_log_; }
-  [[nodiscard]] Mapper& mapper() noexcept { return mapper_; }
-  [[nodiscard]] const Explorer& explorer() const noexcept { return explorer_; }
+  [[nodiscard]] Mapper& mapper() noexcept { return runtime_->mapper(); }
+  [[nodiscard]] const Explorer& explorer() const noexcept { return runtime_->explorer(); }
+  [[nodiscard]] const ExplorationRuntime& runtime() const noexcept { return *runtime_; }
   [[nodiscard]] const World& world() const noexcept { return *world_; }
   [[nodiscard]] const SimChassis& chassis() const noexcept { return chassis_; }
   /// Current explored area [m^2] and coverage (as in the curve).
   [[nodiscard]] CurvePoint measure() const;
 
  private:
-  void render_sensors();
-  void drain_sync();
-  void integrate(const ApproximateTimeCore::Set& set);
-
   std::shared_ptr<const World> world_;
   Profile profile_;
   ExploreSettings settings_;
   RgbdRenderer renderer_;
   SimChassis chassis_;
-  Mapper mapper_;
-  Explorer explorer_;
-  ApproximateTimeCore sync_;
+  std::vector<std::unique_ptr<SimRgbdSensor>> sensors_;
+  std::unique_ptr<ExplorationRuntime> runtime_;
   TruthGrid truth_;
   std::vector<std::uint8_t> reachable_;
   std::size_t reachable_count_ = 0;
-  // Payloads waiting in the synchronizer, by id (moved in, moved out, never copied).
-  std::unordered_map<std::uint64_t, RgbdImage> frames_;
-  std::unordered_map<std::uint64_t, OdometryMsg> odometry_;
-  std::vector<RgbdImage> spare_images_;  ///< recycled buffers
-  std::uint64_t next_id_ = 0;
-  std::uint64_t frame_drops_ = 0, odometry_unmatched_ = 0;
   std::unique_ptr<Clock> wall_clock_;
   double t_ = 0.0;
   double dt_ = 0.05;
-  double next_sensor_t_ = 0.0;
-  double next_map_t_ = 0.0;
   double next_curve_t_ = 0.0;
-  std::uint64_t frame_counter_ = 0;
-  Pose2 pose_;          ///< the runtime's pose estimate
-  Twist odom_twist_;
   StopReason reason_ = StopReason::kRunning;
   std::vector<CurvePoint> curve_;
   std::vector<CollisionRecord> collision_log_;
-  Twist last_cmd_;
   std::vector<StampedPose> est_traj_, true_traj_;
   double path_length_ = 0.0;
   double target_entered_ = -1.0;
   double t90_ = -1.0, t_paper_ = -1.0;
-  std::size_t frames_rendered_ = 0, sets_integrated_ = 0, sets_not_integrated_ = 0;
   double wall_start_ = 0.0, wall_elapsed_ = 0.0;
-  bool map_ready_ = false;
 };
 
 }  // namespace duet::sim
