@@ -130,6 +130,9 @@ const std::vector<Target> kTargets{
     {"FrontierScan", "duet_1t", "Memory/stream_1t/128MiB", 0.5, "frontier full scan (1 thread) >= 0.5x the memory-streaming rate (1 thread)",
      TargetKind::kBandwidth},
     {"DWA", "duet_1t", "", 0.3e6, "dynamic window: 800 trajectories x 30 steps <= 0.3 ms on one core", TargetKind::kMaxTime},
+    // Simulator (issue 4).
+    {"Render", "duet", "", 15e6, "simulated RGB-D: both 640x480 frames (depth + colour + Kinect noise) <= 15 ms on 2 threads",
+     TargetKind::kMaxTime},
 };
 
 }  // namespace

@@ -162,6 +162,18 @@ void Explorer::decide(const Pose2& robot, double now_s) {
       for (const std::uint32_t i : fw.frontier)
         if (i < inflated_.cell_count() && i < fw.mask.size() && fw.mask[i]) frontier_xy_.push_back(inflated_.cell_center(static_cast<std::size_t>(i)));
     }
+    if (decision_.status == ExplorationStatus::kAllBlacklisted) {
+      // Goals abandoned for a while (time limit, no path, an obstacle where the frontier was)
+      // must not end the exploration: forget them and decide again. Only frontiers the robot
+      // stood at and looked at (blacklisted for good) may end it.
+      GoalBlacklist keep;
+      for (const auto& e : blacklist_.entries())
+        if (std::isinf(e.expiry_s)) keep.add(e.xy, now_s, std::numeric_limits<double>::infinity());
+      if (keep.size() < blacklist_.size()) {
+        blacklist_ = keep;
+        continue;
+      }
+    }
     if (!decision_.has_goal()) {
       if (++no_goal_decisions_ > settings_.final_retries) {
         state_ = ExplorerState::kDone;
