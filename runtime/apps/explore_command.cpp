@@ -94,7 +94,9 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                 {"abandoned_no_path", e.goals_abandoned_no_path},
                 {"abandoned_stuck", e.goals_abandoned_stuck},
                 {"abandoned_blocked", e.goals_abandoned_blocked},
-                {"replans", e.replans}};
+                {"replans", e.replans},
+                {"dwa_local_fallbacks", e.local_fallbacks},
+                {"escapes", e.escapes}};
   j["frames_rendered"] = s.frames_rendered;
   j["sets_integrated"] = s.sets_integrated;
   j["sets_not_integrated"] = s.sets_not_integrated;

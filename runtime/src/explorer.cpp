@@ -199,6 +199,35 @@ void Explorer::decide(const Pose2& robot, double now_s) {
   }
 }
 
+std::optional<Twist> Explorer::escape(const Pose2& robot, const Twist& current) const {
+  const DwaSettings& ds = profile_.exploration.dwa;
+  Eigen::Vector2i c;
+  if (!inflated_.cell_of(Eigen::Vector2f(robot.x, robot.y), c)) return std::nullopt;
+  const float here = inflated_.clearance_m[inflated_.index(c.x(), c.y())];
+  const float needed = ds.robot_radius_m + ds.safety_margin_m;
+  if (!(here < needed)) return std::nullopt;  // not hemmed in by seen obstacles: nothing to escape
+  // The direction of the largest clearance among the cells 2 cells away.
+  Eigen::Vector2f best_dir(0.0f, 0.0f);
+  float best = here;
+  for (int dy = -2; dy <= 2; ++dy)
+    for (int dx = -2; dx <= 2; ++dx) {
+      if (std::max(std::abs(dx), std::abs(dy)) != 2 || !inflated_.in_bounds(c.x() + dx, c.y() + dy)) continue;
+      const float v = inflated_.clearance_m[inflated_.index(c.x() + dx, c.y() + dy)];
+      if (v > best) {
+        best = v;
+        best_dir = Eigen::Vector2f(static_cast<float>(dx), static_cast<float>(dy)).normalized();
+      }
+    }
+  if (best_dir.squaredNorm() == 0.0f) return std::nullopt;
+  const float err = wrap_angle(std::atan2(best_dir.y(), best_dir.x()) - robot.theta);
+  const float dw = ds.mapping_max_alpha_rps2 * ds.control_period_s;
+  if (std::fabs(err) > 0.3f) {
+    const float w = std::clamp(1.5f * err, -ds.mapping_max_omega_rps, ds.mapping_max_omega_rps);
+    return Twist{0.0f, std::clamp(w, current.omega - dw, current.omega + dw)};
+  }
+  return Twist{std::min(0.1f, current.v + ds.limits.max_accel_mps2 * ds.control_period_s), 0.0f};
+}
+
 Twist Explorer::control(const Pose2& robot, const Twist& current, double now_s) {
   const Eigen::Vector2f here(robot.x, robot.y);
   if (here.allFinite() && (trail_.empty() || (trail_.back() - here).norm() >= 0.05f)) trail_.push_back(here);
@@ -214,7 +243,15 @@ Twist Explorer::control(const Pose2& robot, const Twist& current, double now_s) 
     return Twist{};
   }
   const DwaSettings& ds = profile_.exploration.dwa;
-  const DwaResult r = dwa_step(local_.clearance(), robot, current, path_, ds, dwa_state_, dwa_ws_);
+  const DwaState before = dwa_state_;
+  DwaResult r = dwa_step(local_.clearance(), robot, current, path_, ds, dwa_state_, dwa_ws_);
+  if (r.status == DwaStatus::kNoValidTrajectory) {
+    // Hemmed in by cells nobody has seen (nearer than the sensors' min range, they stay
+    // unknown): fall back to the global grid, where only seen obstacles count.
+    dwa_state_ = before;
+    r = dwa_step(inflated_.clearance(), robot, current, path_, ds, dwa_state_, dwa_ws_);
+    ++stats_.local_fallbacks;
+  }
   switch (r.status) {
     case DwaStatus::kGoalReached: {
       // A goal is a pose: Procedure 1's X_g, or a frontier goal facing the unknown side. Turn to
@@ -237,6 +274,14 @@ Twist Explorer::control(const Pose2& robot, const Twist& current, double now_s) 
       return Twist{};
     }
     case DwaStatus::kNoValidTrajectory:
+      // Nothing admissible even on the global grid: the robot sits inside the dynamic window's
+      // margin (a map update moved an obstacle nearer). Reversing is blind, so escape forward:
+      // turn towards more clearance, then creep out.
+      if (const auto esc = escape(robot, current)) {
+        ++stats_.escapes;
+        return *esc;
+      }
+      [[fallthrough]];
     case DwaStatus::kNoPath:
       if (stuck_since_s_ < 0.0) stuck_since_s_ = now_s;
       if (now_s - stuck_since_s_ > settings_.stuck_timeout_s) abandon(stats_.goals_abandoned_stuck, now_s);

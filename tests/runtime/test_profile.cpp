@@ -365,7 +365,7 @@ TEST(Profile, ExplorationSectionCarriesTheDefaultsAndTheSensorFans) {
   EXPECT_EQ(ex.strategy.simulation.particles, 100);
   EXPECT_EQ(ex.strategy.simulation.stages, 4);
   EXPECT_EQ(ex.observation.backend, duet::ObservationBackend::kDda);
-  EXPECT_FLOAT_EQ(ex.inflation.robot_radius_m, 0.23f);  // paper §4.1: 0.46 m footprint
+  EXPECT_FLOAT_EQ(ex.inflation.robot_radius_m, 0.29f);  // paper §4.1: 0.46 m footprint + 0.06 m
   EXPECT_FLOAT_EQ(ex.dwa.robot_radius_m, ex.inflation.robot_radius_m);  // one source
   EXPECT_FLOAT_EQ(ex.observation.thresholds.occupied_logodds, ex.cells.occupied_logodds);
   EXPECT_FLOAT_EQ(ex.dwa.limits.max_v_mps, 0.5f);
@@ -412,7 +412,7 @@ TEST(ProfileErrors, ExplorationKeysAreCheckedLikeTheRest) {
     expect_contains(e.what(), "exploration.dwa.max_v_mps: must not exceed chassis.max_linear_speed_mps");
   }
   {
-    const duet::Error e = load_error(dir, dual_with("    robot_radius_m: 0.23 ", "    robot_radius_m: 0.10 "));
+    const duet::Error e = load_error(dir, dual_with("    robot_radius_m: 0.29 ", "    robot_radius_m: 0.10 "));
     expect_contains(e.what(), "exploration.inflation.robot_radius_m: must be at least chassis.radius_m");
   }
   {

@@ -20,7 +20,12 @@
 ///    (0.5 m), so an obstacle the robot did not see on its way in stays unknown once it is
 ///    close, and driving into unknown space near the robot is driving blind. The cells the
 ///    robot's body has covered (its trail) are free - costmap_2d's footprint clearing - so the
-///    robot is never inside an unknown "obstacle" at its own position.
+///    robot is never inside an unknown "obstacle" at its own position. When no trajectory is
+///    admissible on that grid (the robot is hemmed in by unseen cells) the dynamic window falls
+///    back to the global grid for that period (counted in stats().local_fallbacks); when nothing
+///    is admissible there either (the robot is inside the margin: a map update brought an
+///    obstacle nearer), it escapes forward - turn towards more clearance, creep at 0.1 m/s -
+///    because both sensors look forward/right and reversing is blind (stats().escapes).
 ///  - exploration ends with the decision's status when it has no goal (no frontier left, all
 ///    unreachable, all blacklisted, robot blocked) - after `final_retries` further decisions
 ///    at later map updates, because one more map update often re-opens a frontier; with
@@ -76,6 +81,8 @@ struct ExplorerStats {
   int goals_abandoned_stuck = 0;
   int goals_abandoned_blocked = 0;   ///< goal cell became occupied or non-traversable
   int replans = 0;
+  int local_fallbacks = 0;          ///< control periods the dynamic window fell back to the global grid
+  int escapes = 0;                  ///< control periods spent escaping the dynamic window's margin
   double decision_time_sum_s = 0.0;
   double decision_time_max_s = 0.0;
 };
@@ -127,6 +134,7 @@ class Explorer {
   void decide(const Pose2& robot, double now_s);
   bool plan(const Pose2& robot);
   void abandon(int& counter, double now_s);
+  [[nodiscard]] std::optional<Twist> escape(const Pose2& robot, const Twist& current) const;
 
   Profile profile_;
   ExplorerSettings settings_;
