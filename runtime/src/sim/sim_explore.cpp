@@ -176,14 +176,24 @@ CurvePoint SimExplore::measure() const {
 
 bool SimExplore::step() {
   if (reason_ != StopReason::kRunning) return false;
-  // 1. The chassis moves one control period (physics inside); odometry at 50 Hz.
-  const double t_next = t_ + dt_;
+  // 1-2. The chassis moves one control period (physics inside; odometry at 50 Hz), stopping at
+  // every instant a sensor is due (30 Hz frames fall between 20 Hz control ticks), where the
+  // sensor renders from the true pose of that instant.
+  const double t_end = t_ + dt_;
   const std::size_t collisions_before = chassis_.collisions();
-  chassis_.advance(dt_);
-  t_ = t_next;
+  double t_chassis = t_;
+  for (;;) {
+    double next = t_end;
+    for (const auto& s : sensors_) next = std::min(next, s->next_due_s());
+    if (next > t_chassis) {
+      chassis_.advance(next - t_chassis);
+      t_chassis = next;
+    }
+    for (auto& s : sensors_) (void)s->capture(t_chassis);
+    if (t_chassis + 1e-9 >= t_end) break;
+  }
+  t_ = t_end;
   if (chassis_.collisions() > collisions_before) collision_log_.push_back({t_, chassis_.true_pose(), runtime_->last_command()});
-  // 2. Sensors, when due (stamped with this period's end, where the true pose is).
-  for (auto& s : sensors_) (void)s->capture(t_);
   // 3. The robot's runtime: synchronizer -> mapper -> explorer -> command.
   runtime_->override_pose(settings_.use_true_pose ? std::optional<Pose2>(chassis_.true_pose()) : std::nullopt);
   runtime_->tick(t_);

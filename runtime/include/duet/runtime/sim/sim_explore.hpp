@@ -131,6 +131,8 @@ class SimRgbdSensor final : public RgbdSensorInterface {
   [[nodiscard]] std::vector<StampedRgbd> take_frames() override;
   void recycle(RgbdImage&& image) override;
   [[nodiscard]] std::size_t frames_rendered() const noexcept { return rendered_; }
+  /// When the next frame is due [s].
+  [[nodiscard]] double next_due_s() const noexcept { return next_t_; }
 
  private:
   const RgbdRenderer& renderer_;
