@@ -198,10 +198,9 @@ void write_outputs(sim::SimExplore& run, const std::filesystem::path& out) {
 }
 
 void print_progress(const sim::SimExplore& run, bool tty, const char* prefix) {
-  const auto p = run.measure();
-  const auto s = run.summary();
+  const auto s = run.summary();  // measures the map once
   std::fprintf(stderr, "%s%st = %6.1f s  area %6.2f m^2  coverage %5.1f %%  goals %d  collisions %zu  %.1fx real time%s",
-               tty ? "\r\033[K" : "", prefix, p.t_s, p.area_m2, 100.0 * p.coverage, s.explorer.goals_reached, s.collisions,
+               tty ? "\r\033[K" : "", prefix, s.sim_time_s, s.explored_area_m2, 100.0 * s.coverage, s.explorer.goals_reached, s.collisions,
                s.wall_time_s > 0.0 ? s.sim_time_s / s.wall_time_s : 0.0, tty ? "" : "\n");
 }
 

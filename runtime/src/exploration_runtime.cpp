@@ -10,13 +10,6 @@
 namespace duet {
 namespace {
 
-Eigen::Isometry3f to_iso(const Pose2& p) {
-  Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
-  T.linear() = Eigen::AngleAxisf(p.theta, Eigen::Vector3f::UnitZ()).toRotationMatrix();
-  T.translation() = Eigen::Vector3f(p.x, p.y, 0.0f);
-  return T;
-}
-
 ApproximateTimeSettings sync_settings(const Profile& profile, const RuntimeSettings& s) {
   ApproximateTimeSettings a = s.sync;
   const double odom_rate = profile.chassis.odometry_rate_hz;
@@ -81,7 +74,7 @@ void ExplorationRuntime::integrate(const ApproximateTimeCore::Set& set, double n
     // The mapper gets the pose at the frames' time: the synchronized odometry (or, for
     // debugging, the overriding pose).
     const Pose2 at = pose_override_ ? *pose_override_ : odom.pose;
-    mapper_.integrate(frames, to_iso(at));
+    mapper_.integrate(frames, to_isometry(at));
     explorer_.update_map(mapper_.grid(), pose_, now_s);
     ++stats_.sets_integrated;
     while (next_map_t_ <= stamp + 1e-9) next_map_t_ += 1.0 / settings_.map_rate_hz;

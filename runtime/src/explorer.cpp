@@ -19,6 +19,14 @@ float wrap_angle(float a) {
   return a;
 }
 
+/// Rotation in place towards a heading error `err` [rad], within the paper's motion constraint
+/// (|omega| and |domega/dt| bounds of the dynamic window settings).
+Twist turn_in_place(float err, const Twist& current, const DwaSettings& ds) {
+  const float w = std::clamp(1.5f * err, -ds.mapping_max_omega_rps, ds.mapping_max_omega_rps);
+  const float dw = ds.mapping_max_alpha_rps2 * ds.control_period_s;
+  return Twist{0.0f, std::clamp(w, current.omega - dw, current.omega + dw)};
+}
+
 bool same_geometry(const GridView& a, const GridView& b) {
   return a.width == b.width && a.height == b.height && a.resolution_m == b.resolution_m &&
          a.origin.x() == b.origin.x() && a.origin.y() == b.origin.y();
@@ -220,11 +228,7 @@ std::optional<Twist> Explorer::escape(const Pose2& robot, const Twist& current) 
     }
   if (best_dir.squaredNorm() == 0.0f) return std::nullopt;
   const float err = wrap_angle(std::atan2(best_dir.y(), best_dir.x()) - robot.theta);
-  const float dw = ds.mapping_max_alpha_rps2 * ds.control_period_s;
-  if (std::fabs(err) > 0.3f) {
-    const float w = std::clamp(1.5f * err, -ds.mapping_max_omega_rps, ds.mapping_max_omega_rps);
-    return Twist{0.0f, std::clamp(w, current.omega - dw, current.omega + dw)};
-  }
+  if (std::fabs(err) > 0.3f) return turn_in_place(err, current, ds);
   return Twist{std::min(0.1f, current.v + ds.limits.max_accel_mps2 * ds.control_period_s), 0.0f};
 }
 
@@ -258,11 +262,7 @@ Twist Explorer::control(const Pose2& robot, const Twist& current, double now_s) 
       // its heading, within the paper's bounded angular speed, before the next decision - the
       // sensors must look at what the goal was chosen for.
       const float err = wrap_angle(goal_->theta - robot.theta);
-      if (std::fabs(err) > 0.2f) {
-        const float w = std::clamp(1.5f * err, -ds.mapping_max_omega_rps, ds.mapping_max_omega_rps);
-        const float dw = ds.mapping_max_alpha_rps2 * ds.control_period_s;
-        return Twist{0.0f, std::clamp(w, current.omega - dw, current.omega + dw)};
-      }
+      if (std::fabs(err) > 0.2f) return turn_in_place(err, current, ds);
       ++stats_.goals_reached;
       // A frontier that is still a frontier after the robot stood at it and looked at it cannot
       // be observed from there (the inside of an obstacle behind a gap in its outline): never again.

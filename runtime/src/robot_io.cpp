@@ -8,6 +8,13 @@
 
 namespace duet {
 
+Eigen::Isometry3f to_isometry(const Pose2& p) {
+  Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
+  T.linear() = Eigen::AngleAxisf(p.theta, Eigen::Vector3f::UnitZ()).toRotationMatrix();
+  T.translation() = Eigen::Vector3f(p.x, p.y, 0.0f);
+  return T;
+}
+
 SensorFrame frame_view(const RgbdImage& image, const SensorProfile& sensor, const Eigen::Isometry3f& T_robot_optical) {
   const PinholeIntrinsics& in = sensor.intrinsics;
   const auto pixels = static_cast<std::size_t>(std::max(0, image.width)) * static_cast<std::size_t>(std::max(0, image.height));

@@ -13,17 +13,6 @@ namespace {
 
 constexpr double kPaperAreaM2 = 31.0;  // paper §4.2, Fig. 10: dual sensors, 31.0 m^2 in 196 s
 
-double wall_now() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-Eigen::Isometry3f to_iso(const Pose2& p) {
-  Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
-  T.linear() = Eigen::AngleAxisf(p.theta, Eigen::Vector3f::UnitZ()).toRotationMatrix();
-  T.translation() = Eigen::Vector3f(p.x, p.y, 0.0f);
-  return T;
-}
-
 std::uint64_t mix(std::uint64_t x) {
   x += 0x9E3779B97F4A7C15ull;
   x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
@@ -104,7 +93,7 @@ bool SimRgbdSensor::capture(double now_s) {
     f.image = std::move(spare_.back());
     spare_.pop_back();
   }
-  renderer_.render(sensor_, to_iso(chassis_.true_pose()) * sensor_.T_robot_optical(), mix(seed_ + 0x100000001B3ull * rendered_),
+  renderer_.render(sensor_, to_isometry(chassis_.true_pose()) * sensor_.T_robot_optical(), mix(seed_ + 0x100000001B3ull * rendered_),
                    f.image);
   ++rendered_;
   out_.push_back(std::move(f));
@@ -145,8 +134,6 @@ SimExplore::SimExplore(World world, Profile profile, ExploreSettings settings)
   for (const auto& s : profile_.sensors) range = std::max(range, s.max_depth_m);
   reachable_ = reachable_free_mask(truth_, world_->start, profile_.exploration.inflation.robot_radius_m, range);
   for (const auto m : reachable_) reachable_count_ += m;
-  if (settings_.realtime) wall_clock_ = std::make_unique<SteadyClock>(1.0);
-  wall_start_ = wall_now();
   true_traj_.push_back({0.0, chassis_.true_pose()});
   est_traj_.push_back({0.0, world_->start});
 }
@@ -219,8 +206,8 @@ bool SimExplore::step() {
     const CurvePoint p = measure();
     if (curve_.empty() || curve_.back().t_s < t_) curve_.push_back(p);
   }
-  if (wall_clock_) wall_clock_->sleep_until(t_);
-  wall_elapsed_ = wall_now() - wall_start_;
+  if (settings_.realtime) wall_.sleep_until(t_);
+  wall_elapsed_ = wall_.now_s();
   return reason_ == StopReason::kRunning;
 }
 

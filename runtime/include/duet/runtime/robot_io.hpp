@@ -12,6 +12,8 @@
 #include <duet/kernels/motion_model.hpp>
 #include <duet/runtime/profile.hpp>
 
+#include <Eigen/Geometry>
+
 #include <cstdint>
 #include <vector>
 
@@ -33,6 +35,10 @@ struct RgbdImage {
 /// does not match the sensor's intrinsics or its buffers.
 [[nodiscard]] SensorFrame frame_view(const RgbdImage& image, const SensorProfile& sensor,
                                      const Eigen::Isometry3f& T_robot_optical);
+
+/// The planar pose as a 3D transform (rotation about z by theta, z = 0): T_world_robot of a
+/// robot on the floor, as the mapper takes it.
+[[nodiscard]] Eigen::Isometry3f to_isometry(const Pose2& pose);
 
 /// A stamped frame of one sensor.
 struct StampedRgbd {

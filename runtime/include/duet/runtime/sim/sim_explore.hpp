@@ -186,7 +186,7 @@ class SimExplore {
   TruthGrid truth_;
   std::vector<std::uint8_t> reachable_;
   std::size_t reachable_count_ = 0;
-  std::unique_ptr<Clock> wall_clock_;
+  SteadyClock wall_;  ///< wall time since construction; paces the loop when realtime
   double t_ = 0.0;
   double dt_ = 0.05;
   double next_curve_t_ = 0.0;
@@ -197,7 +197,7 @@ class SimExplore {
   double path_length_ = 0.0;
   double target_entered_ = -1.0;
   double t90_ = -1.0, t_paper_ = -1.0;
-  double wall_start_ = 0.0, wall_elapsed_ = 0.0;
+  double wall_elapsed_ = 0.0;
 };
 
 }  // namespace duet::sim
