@@ -547,7 +547,9 @@ typedef struct duet_observation_settings {
 
 DUET_API void duet_observation_settings_init(duet_observation_settings* settings);
 
-/* Inflation: a cell is blocked if occupied (or also unknown, unknown_is_obstacle = 1);
+/* Inflation: a cell is blocked if occupied; or observed but neither free nor occupied (its
+ * hits and misses disagree, as on a wall face seen at a grazing angle) when
+ * uncertain_is_obstacle = 1 (the default); or never observed when unknown_is_obstacle = 1;
  * clearance = exact Euclidean distance from a cell's centre to the nearest blocked cell's
  * centre [m] (+inf if there is none; the area outside the grid is not blocked); a cell is
  * traversable iff it is free and its clearance > robot_radius_m. */
@@ -555,6 +557,7 @@ typedef struct duet_inflation_settings {
   duet_cell_thresholds thresholds;
   float robot_radius_m;    /* finite, >= 0 [m] (default 0.20: Kobuki 0.177 m + margin) */
   int unknown_is_obstacle; /* 0 or 1 (default 0) */
+  int uncertain_is_obstacle; /* 0 or 1 (default 1) */
 } duet_inflation_settings;
 
 DUET_API void duet_inflation_settings_init(duet_inflation_settings* settings);

@@ -162,6 +162,7 @@ InflationSettings to_cpp(const duet_inflation_settings* s, const char* name) {
     c.thresholds = from_c(s->thresholds);
     c.robot_radius_m = s->robot_radius_m;
     c.unknown_is_obstacle = flag(s->unknown_is_obstacle, name, "unknown_is_obstacle");
+    c.uncertain_is_obstacle = flag(s->uncertain_is_obstacle, name, "uncertain_is_obstacle");
   }
   validate_as(c, name);
   return c;
@@ -327,6 +328,7 @@ DUET_API void duet_inflation_settings_init(duet_inflation_settings* settings) {
   settings->thresholds = to_c(c.thresholds);
   settings->robot_radius_m = c.robot_radius_m;
   settings->unknown_is_obstacle = c.unknown_is_obstacle ? 1 : 0;
+  settings->uncertain_is_obstacle = c.uncertain_is_obstacle ? 1 : 0;
 }
 
 DUET_API void duet_path_settings_init(duet_path_settings* settings) {

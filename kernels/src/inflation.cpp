@@ -87,6 +87,7 @@ void inflate(const GridView& grid, const InflationSettings& s, InflatedGrid& out
   std::uint8_t* tr = out.traversable.data();
   const CellThresholds t = s.thresholds;
   const bool unknown_blocks = s.unknown_is_obstacle;
+  const bool uncertain_blocks = s.uncertain_is_obstacle;
 
   // Pass 1: classification and the vertical 1D distance (in cells, +inf = none in the column),
   // parallel over fixed blocks of columns, each swept row by row (sequential memory per row).
@@ -95,9 +96,11 @@ void inflate(const GridView& grid, const InflationSettings& s, InflatedGrid& out
       const std::size_t row = static_cast<std::size_t>(y) * sw;
       const float* prev = y > 0 ? cl + row - sw : nullptr;
       for (std::size_t x = x0; x < x1; ++x) {
-        const CellState c = classify(lo[row + x], t);
+        const float l = lo[row + x];
+        const CellState c = classify(l, t);
         st[row + x] = c;
-        const bool blocked = c == CellState::kOccupied || (unknown_blocks && c == CellState::kUnknown);
+        const bool blocked = c == CellState::kOccupied ||
+                             (c == CellState::kUnknown && (std::isnan(l) ? unknown_blocks : uncertain_blocks));
         cl[row + x] = blocked ? 0.0f : (prev ? prev[x] + 1.0f : kInf);
       }
     }

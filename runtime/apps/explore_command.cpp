@@ -96,7 +96,8 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                 {"abandoned_blocked", e.goals_abandoned_blocked},
                 {"replans", e.replans},
                 {"dwa_local_fallbacks", e.local_fallbacks},
-                {"escapes", e.escapes}};
+                {"escapes", e.escapes},
+                {"goals_moved", e.goals_moved}};
   j["frames_rendered"] = s.frames_rendered;
   j["sets_integrated"] = s.sets_integrated;
   j["sets_not_integrated"] = s.sets_not_integrated;

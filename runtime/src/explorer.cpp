@@ -43,6 +43,8 @@ void validate(const ExplorerSettings& s) {
   positive(s.stuck_timeout_s, "stuck_timeout_s");
   if (!(s.blacklist_ttl_s > 0.0f))  // +inf allowed
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::blacklist_ttl_s must be in (0, inf], got " + std::to_string(s.blacklist_ttl_s));
+  if (!(s.goal_standoff_search_m >= 0.0f && s.goal_standoff_search_m <= 5.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::goal_standoff_search_m must be in [0, 5] m, got " + std::to_string(s.goal_standoff_search_m));
   if (s.final_retries < 0 || s.final_retries > 1000)
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::final_retries must be in [0, 1000], got " + std::to_string(s.final_retries));
 }
@@ -96,10 +98,9 @@ void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double 
   if (state_ == ExplorerState::kIdle) state_ = ExplorerState::kExploring;
   wait_for_map_ = false;  // a decision that found nothing may try again on the new map
   if (goal_) {
-    // The goal cell became an obstacle (or its inflation): abandon; else re-plan on the new map.
-    Eigen::Vector2i c;
-    const Eigen::Vector2f g(goal_->x, goal_->y);
-    if (!inflated_.cell_of(g, c) || !inflated_.traversable[inflated_.index(c.x(), c.y())]) {
+    // The goal cell became an obstacle (or its inflation, or the margin of unknown cells) and no
+    // cell near it will do: abandon; else re-plan on the new map.
+    if (!recheck_goal()) {
       abandon(stats_.goals_abandoned_blocked, now_s);
     } else if (plan(robot)) {
       ++stats_.replans;
@@ -118,9 +119,48 @@ bool Explorer::plan(const Pose2& robot) {
   return true;
 }
 
+std::optional<Eigen::Vector2f> Explorer::standoff(const Eigen::Vector2f& target) const {
+  const float needed = profile_.exploration.dwa.robot_radius_m + profile_.exploration.dwa.safety_margin_m;
+  auto fits = [&](int x, int y) {
+    if (!inflated_.in_bounds(x, y) || !local_.in_bounds(x, y)) return false;
+    return inflated_.traversable[inflated_.index(x, y)] != 0 && local_.clearance_m[local_.index(x, y)] > needed;
+  };
+  Eigen::Vector2i c = inflated_.cell_of(target);
+  if (fits(c.x(), c.y())) return target;
+  // The nearest fitting cell centre by distance to the target (ties: the lower row, then column,
+  // so the result is deterministic).
+  const float r = settings_.goal_standoff_search_m;
+  const int rc = static_cast<int>(std::ceil(r / inflated_.resolution_m));
+  std::optional<Eigen::Vector2f> best;
+  float best_d = std::numeric_limits<float>::infinity();
+  for (int dy = -rc; dy <= rc; ++dy)
+    for (int dx = -rc; dx <= rc; ++dx) {
+      const int x = c.x() + dx, y = c.y() + dy;
+      if (!fits(x, y)) continue;
+      const Eigen::Vector2f p = inflated_.cell_center(inflated_.index(x, y));
+      const float d = (p - target).norm();
+      if (d <= r && d < best_d) {
+        best_d = d;
+        best = p;
+      }
+    }
+  return best;
+}
+
+bool Explorer::recheck_goal() {
+  const Eigen::Vector2f g(goal_->x, goal_->y);
+  if (const auto here = standoff(g); here && (*here - g).norm() == 0.0f) return true;  // still fits
+  const auto p = standoff(goal_target_);
+  if (!p) return false;
+  goal_->x = p->x();
+  goal_->y = p->y();
+  ++stats_.goals_moved;
+  return true;
+}
+
 void Explorer::abandon(int& counter, double now_s) {
   ++counter;
-  if (goal_) blacklist_.add(Eigen::Vector2f(goal_->x, goal_->y), now_s, settings_.blacklist_ttl_s);
+  if (goal_) blacklist_.add(goal_target_, now_s, settings_.blacklist_ttl_s);
   goal_.reset();
   path_.clear();
   dwa_state_.reset();
@@ -191,6 +231,12 @@ void Explorer::decide(const Pose2& robot, double now_s) {
       return;
     }
     goal_ = decision_.goal;
+    goal_target_ = Eigen::Vector2f(goal_->x, goal_->y);
+    if (!recheck_goal()) {
+      abandon(stats_.goals_abandoned_no_path, now_s);
+      continue;
+    }
+    log_.back().goal = *goal_;
     if (!plan(robot)) {
       abandon(stats_.goals_abandoned_no_path, now_s);
       continue;
@@ -267,7 +313,7 @@ Twist Explorer::control(const Pose2& robot, const Twist& current, double now_s) 
       // A frontier that is still a frontier after the robot stood at it and looked at it cannot
       // be observed from there (the inside of an obstacle behind a gap in its outline): never again.
       if (decision_.status == ExplorationStatus::kFrontierGoal)
-        blacklist_.add(Eigen::Vector2f(goal_->x, goal_->y), now_s, std::numeric_limits<double>::infinity());
+        blacklist_.add(goal_target_, now_s, std::numeric_limits<double>::infinity());
       goal_.reset();
       path_.clear();
       dwa_state_.reset();

@@ -405,9 +405,10 @@ ExplorationProfile read_exploration(Reader& r, const YAML::Node& n, const Chassi
     q.opt_int("tile_cells", ex.observation.tile_cells, kAnyInt);
   }
   if (const YAML::Node b = m.get("inflation")) {
-    MapReader q(r, b, m.path_of("inflation"), {"robot_radius_m", "unknown_is_obstacle"});
+    MapReader q(r, b, m.path_of("inflation"), {"robot_radius_m", "unknown_is_obstacle", "uncertain_is_obstacle"});
     q.opt_real("robot_radius_m", ex.inflation.robot_radius_m);
     q.opt_bool("unknown_is_obstacle", ex.inflation.unknown_is_obstacle);
+    q.opt_bool("uncertain_is_obstacle", ex.inflation.uncertain_is_obstacle);
   }
   if (const YAML::Node b = m.get("path")) {
     MapReader q(r, b, m.path_of("path"), {"allow_diagonal", "clearance_weight", "clearance_decay_m", "goal_tolerance_m"});

@@ -224,6 +224,21 @@ TEST(DuetCli, ExploresAWorldAndWritesEveryOutput) {
   EXPECT_GE(poses, 20 * 30);
 }
 
+// --realtime paces the simulation by the wall clock: the run never gets ahead of it (a lower
+// bound on wall time; being slower than real time on a loaded machine is allowed).
+TEST(DuetCli, RealtimeExploreNeverRunsAheadOfTheWallClock) {
+  const fs::path dir = temp_dir("explore-realtime");
+  const fs::path world = write_file(dir, "room.yaml", kRoomWorld);
+  const CliRun r = run("explore -q --realtime --world " + world.string() + " --max-time 3 --seed 1 --out " + (dir / "out").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto s = nlohmann::json::parse(std::ifstream(dir / "out" / "summary.json"));
+  const double sim = s["sim_time_s"].get<double>();
+  EXPECT_NEAR(sim, 3.0, 0.06);
+  EXPECT_GE(s["wall_time_s"].get<double>(), sim - 0.06);  // the last period may end a tick early
+  EXPECT_LE(s["speed_vs_real_time"].get<double>(), 1.03);
+  EXPECT_EQ(s["stop_reason"], "time_limit");
+}
+
 TEST(DuetCli, ExploreErrorsNameTheFileAndTheProblem) {
   const fs::path dir = temp_dir("explore-errors");
   const fs::path bad_world = write_file(dir, "bad_world.yaml", "name: x\nfloor: {min: [0, 0], max: [4, 3]}\nstart: [1, 1]\n");

@@ -284,6 +284,8 @@ TEST(CapiPlannerSettings, InitFunctionsMirrorTheCppDefaults) {
   EXPECT_EQ(is.thresholds.free_logodds, cis.thresholds.free_logodds);
   EXPECT_EQ(is.robot_radius_m, cis.robot_radius_m);
   EXPECT_EQ(is.unknown_is_obstacle, cis.unknown_is_obstacle ? 1 : 0);
+  EXPECT_EQ(is.uncertain_is_obstacle, cis.uncertain_is_obstacle ? 1 : 0);
+  EXPECT_EQ(is.uncertain_is_obstacle, 1);
 
   duet_path_settings ps;
   duet_path_settings_init(&ps);
@@ -778,10 +780,12 @@ TEST_F(PlannerTest, ReadBacksEqualTheKernel) {
   duet_inflation_settings_init(&is);
   is.robot_radius_m = 0.25f;
   is.unknown_is_obstacle = 1;
+  is.uncertain_is_obstacle = 0;
   set_grid(planner_, g, nullptr, &is);
   duet::InflationSettings cis;
   cis.robot_radius_m = 0.25f;
   cis.unknown_is_obstacle = true;
+  cis.uncertain_is_obstacle = false;
   duet::InflatedGrid inflated;
   duet::inflate(g.view(), cis, inflated);
   int w = 0, h = 0;
@@ -1379,6 +1383,9 @@ TEST_F(PlannerTest, BadGridArgumentsLeaveThePlannerUnchanged) {
   duet_inflation_settings bad_flag;
   duet_inflation_settings_init(&bad_flag);
   bad_flag.unknown_is_obstacle = 2;
+  duet_inflation_settings bad_flag2;
+  duet_inflation_settings_init(&bad_flag2);
+  bad_flag2.uncertain_is_obstacle = -1;
   const std::vector<Case> cases = {
       {"NULL cells", [&] { duet_planner_set_grid(planner_, nullptr, 0, 4, 4, 0.1f, 0, 0, nullptr, nullptr); },
        DUET_ERROR_INVALID_ARGUMENT, "logodds is NULL"},
@@ -1421,6 +1428,9 @@ TEST_F(PlannerTest, BadGridArgumentsLeaveThePlannerUnchanged) {
       {"bad flag",
        [&] { duet_planner_set_grid(planner_, small.data(), 0, 4, 4, 0.1f, 0, 0, nullptr, &bad_flag); },
        DUET_ERROR_INVALID_ARGUMENT, "inflation_settings.unknown_is_obstacle is 2"},
+      {"bad flag 2",
+       [&] { duet_planner_set_grid(planner_, small.data(), 0, 4, 4, 0.1f, 0, 0, nullptr, &bad_flag2); },
+       DUET_ERROR_INVALID_ARGUMENT, "inflation_settings.uncertain_is_obstacle is -1"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.what);

@@ -1,6 +1,7 @@
 // inflate(): classification, exact Euclidean distance transform vs a brute-force reference (min
 // over every blocked cell of the integer squared distance, same float conversion so results are
-// compared exactly), traversability at the radius boundary, unknown_is_obstacle, empty / 1x1 /
+// compared exactly), traversability at the radius boundary, unknown_is_obstacle and
+// uncertain_is_obstacle (NaN vs observed-but-between-thresholds cells), empty / 1x1 /
 // all-occupied / obstacle-free grids, buffer reuse, invalid settings, thread counts, and the
 // Willow Garage map (sampled cells vs brute force).
 #include "kernel_test_util.hpp"
@@ -68,7 +69,9 @@ RefInflation reference_inflate(const TestGrid& g, const InflationSettings& s) {
       if (l >= s.thresholds.occupied_logodds) c = CellState::kOccupied;
       else if (l <= s.thresholds.free_logodds) c = CellState::kFree;
       r.state[static_cast<std::size_t>(y * g.w + x)] = c;
-      if (c == CellState::kOccupied || (s.unknown_is_obstacle && c == CellState::kUnknown)) blocked.emplace_back(x, y);
+      const bool never_seen = std::isnan(l);
+      if (c == CellState::kOccupied || (c == CellState::kUnknown && (never_seen ? s.unknown_is_obstacle : s.uncertain_is_obstacle)))
+        blocked.emplace_back(x, y);
     }
   r.clearance.resize(n);
   r.traversable.resize(n);
@@ -110,14 +113,17 @@ TEST(Inflation, MatchesBruteForceOnRandomGrids) {
   std::uint32_t seed = 7;
   for (const auto& [w, h] : std::vector<std::pair<int, int>>{{1, 1}, {1, 17}, {23, 1}, {37, 23}, {64, 64}, {130, 41}}) {
     for (const double p_occ : {0.002, 0.03, 0.3, 0.9}) {
-      for (const bool unk : {false, true}) {
+      for (const int flags : {0, 1, 2, 3}) {
+        const bool unk = (flags & 1) != 0, unc = (flags & 2) != 0;
         const TestGrid g = random_grid(w, h, p_occ, 0.15, ++seed);
         InflationSettings s;
         s.unknown_is_obstacle = unk;
+        s.uncertain_is_obstacle = unc;
         s.robot_radius_m = 0.1f;
         InflatedGrid out;
         inflate(g.view(), s, out);
-        SCOPED_TRACE(::testing::Message() << w << "x" << h << " p_occ=" << p_occ << " unknown_is_obstacle=" << unk);
+        SCOPED_TRACE(::testing::Message() << w << "x" << h << " p_occ=" << p_occ << " unknown_is_obstacle=" << unk
+                                          << " uncertain_is_obstacle=" << unc);
         expect_matches_reference(g, s, out);
       }
     }
@@ -187,6 +193,35 @@ TEST(Inflation, EmptyAllOccupiedNoObstacleAndOneCell) {
     EXPECT_EQ(out.clearance_m[0], v == kOcc ? 0.0f : kInf);
     EXPECT_EQ(out.traversable[0], v == kFree ? 1 : 0);
   }
+}
+
+TEST(Inflation, UncertainAndNeverSeenCellsAreDistinguished) {
+  // A free corridor with one never-observed cell (NaN) and one observed-but-uncertain cell
+  // (a hit and a miss: 0.85 - 0.4 = 0.45, between the thresholds): by default only the
+  // uncertain one blocks; each flag switches its own kind.
+  TestGrid g;
+  g.w = 9;
+  g.h = 1;
+  g.l.assign(9, kFree);
+  g.l[2] = kNaN;
+  g.l[6] = 0.45f;
+  InflatedGrid out;
+  InflationSettings s;
+  s.robot_radius_m = 0.0f;
+  inflate(g.view(), s, out);
+  EXPECT_EQ(out.state[2], CellState::kUnknown);
+  EXPECT_EQ(out.state[6], CellState::kUnknown);
+  EXPECT_FLOAT_EQ(out.clearance_m[2], 0.2f);
+  EXPECT_EQ(out.clearance_m[6], 0.0f);
+  EXPECT_FLOAT_EQ(out.clearance_m[8], 0.1f);
+  s.uncertain_is_obstacle = false;
+  inflate(g.view(), s, out);
+  for (const float c : out.clearance_m) EXPECT_EQ(c, kInf);
+  s.unknown_is_obstacle = true;
+  inflate(g.view(), s, out);
+  EXPECT_EQ(out.clearance_m[2], 0.0f);
+  EXPECT_FLOAT_EQ(out.clearance_m[6], 0.2f);
+  for (std::size_t i = 0; i < out.traversable.size(); ++i) EXPECT_EQ(out.traversable[i], (i == 2 || i == 6) ? 0 : 1);
 }
 
 TEST(Inflation, ZeroRadiusAllowsEveryUnblockedFreeCell) {

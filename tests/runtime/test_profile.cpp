@@ -367,6 +367,8 @@ TEST(Profile, ExplorationSectionCarriesTheDefaultsAndTheSensorFans) {
   EXPECT_EQ(ex.observation.backend, duet::ObservationBackend::kDda);
   EXPECT_FLOAT_EQ(ex.inflation.robot_radius_m, 0.29f);  // paper §4.1: 0.46 m footprint + 0.06 m
   EXPECT_FLOAT_EQ(ex.dwa.robot_radius_m, ex.inflation.robot_radius_m);  // one source
+  EXPECT_FALSE(ex.inflation.unknown_is_obstacle);  // frontiers stay reachable
+  EXPECT_TRUE(ex.inflation.uncertain_is_obstacle);  // faces seen at grazing angles block
   EXPECT_FLOAT_EQ(ex.observation.thresholds.occupied_logodds, ex.cells.occupied_logodds);
   EXPECT_FLOAT_EQ(ex.dwa.limits.max_v_mps, 0.5f);
   EXPECT_TRUE(ex.strategy.use_simulation);
@@ -414,6 +416,11 @@ TEST(ProfileErrors, ExplorationKeysAreCheckedLikeTheRest) {
   {
     const duet::Error e = load_error(dir, dual_with("    robot_radius_m: 0.29 ", "    robot_radius_m: 0.10 "));
     expect_contains(e.what(), "exploration.inflation.robot_radius_m: must be at least chassis.radius_m");
+  }
+  {
+    const duet::Error e = load_error(dir, dual_with("    uncertain_is_obstacle: true ", "    uncertain_is_obstacle: maybe "));
+    EXPECT_EQ(e.code(), duet::ErrorCode::kParse);
+    expect_contains(e.what(), "exploration.inflation.uncertain_is_obstacle");
   }
   {
     const duet::Error e = load_error(dir, dual_with("    gamma: 0.9 ", "    gamma: fast "));

@@ -6,12 +6,20 @@
 /// search (frontier.hpp) and the dynamic window (through clearance()).
 ///
 /// Semantics (decided here, the paper is silent):
-///  - A cell is *blocked* if it is kOccupied, or also kUnknown when unknown_is_obstacle is set.
+///  - A cell is *blocked* if it is kOccupied; or observed but neither free nor occupied (finite
+///    log-odds strictly between the two thresholds: its hits and misses disagree) when
+///    uncertain_is_obstacle is set (the default); or never observed (NaN) when
+///    unknown_is_obstacle is set. Why uncertain cells block by default: a wall face seen at a
+///    grazing angle gets a hit from one scan and misses from the grazing rays of the next ones
+///    (each ray to a farther point of the face crosses the cells of the nearer part), so its
+///    cells hover around p = 0.5; treating them as free let a lab run plan a goal 3 cm from a
+///    shelf's face and drive into it.
 ///  - clearance_m[i] is the exact Euclidean distance between the centre of cell i and the centre
 ///    of the nearest blocked cell, in metres: res * sqrt(dx^2 + dy^2) for integer cell offsets
 ///    (0 for a blocked cell, +inf when the grid has no blocked cell). The area outside the grid is
 ///    NOT blocked (the grid border is not a wall): a known-free corridor running off the edge of
 ///    the map stays traversable.
+///  - state[i] is classify(): kUnknown covers both never-observed and uncertain cells.
 ///  - traversable[i] = 1 iff state[i] == kFree and clearance_m[i] > robot_radius_m (strictly). So
 ///    unknown cells are never traversable (whatever unknown_is_obstacle says), and with the default
 ///    unknown_is_obstacle = false the robot may drive right up to the edge of the known free space
@@ -35,7 +43,8 @@ namespace duet {
 struct InflationSettings {
   CellThresholds thresholds;         ///< log-odds -> {free, unknown, occupied}
   float robot_radius_m = 0.20f;      ///< Kobuki 0.177 m + margin [m]; cells with clearance <= this are not traversable; >= 0
-  bool unknown_is_obstacle = false;  ///< clearance measured to occupied cells only (false) or to occupied+unknown (true)
+  bool unknown_is_obstacle = false;  ///< never-observed (NaN) cells block too (true) or not (false)
+  bool uncertain_is_obstacle = true; ///< observed cells between the free and occupied thresholds block too (true) or not (false)
 };
 /// Throws duet::Error(kInvalidArgument) naming the field: robot_radius_m finite and >= 0,
 /// thresholds as validate(CellThresholds).

@@ -26,6 +26,16 @@
 ///    is admissible there either (the robot is inside the margin: a map update brought an
 ///    obstacle nearer), it escapes forward - turn towards more clearance, creep at 0.1 m/s -
 ///    because both sensors look forward/right and reversing is blind (stats().escapes).
+///  - a goal is a place the dynamic window can stand on its own grid: a goal (simulated or
+///    frontier) whose cell lies within the dynamic window's radius of an unknown cell is moved
+///    to the nearest cell, at most goal_standoff_search_m away, that is traversable on the
+///    global grid and clear of unknown cells by that radius (stats().goals_moved); no such cell
+///    = no path. A frontier goal always borders unknown cells, and the unknown beside a goal
+///    may be an obstacle face never seen (a Kinect returns nothing above ~80 deg incidence, so
+///    a shelf's face seen along an aisle stays unknown): measured on the lab, a goal 3 cm from
+///    such a face made the robot enter the local margin, fall back to the global grid and hit
+///    the shelf. The goal is re-checked (and moved again) at every map update. Blacklisting
+///    uses the decision's own goal, not the moved one.
 ///  - exploration ends with the decision's status when it has no goal (no frontier left, all
 ///    unreachable, all blacklisted, robot blocked) - after `final_retries` further decisions
 ///    at later map updates, because one more map update often re-opens a frontier; with
@@ -61,6 +71,9 @@ struct ExplorerSettings {
   /// on the lab: 10-60 bits per goal at 99 % coverage), so R_g <= eps_R alone never ends a run.
   /// Costs one frontier search per simulated goal. false: the paper's rule only.
   bool stop_when_no_frontier = true;
+  /// How far a goal may be moved off cells next to unknown space (see the goal life cycle) [m],
+  /// [0, 5]; 0 = never move a goal (it is then abandoned when next to unknown cells).
+  float goal_standoff_search_m = 0.75f;
 };
 void validate(const ExplorerSettings& s);
 
@@ -83,6 +96,7 @@ struct ExplorerStats {
   int replans = 0;
   int local_fallbacks = 0;          ///< control periods the dynamic window fell back to the global grid
   int escapes = 0;                  ///< control periods spent escaping the dynamic window's margin
+  int goals_moved = 0;              ///< goals moved off cells next to unknown space (decisions and re-checks)
   double decision_time_sum_s = 0.0;
   double decision_time_max_s = 0.0;
 };
@@ -135,6 +149,11 @@ class Explorer {
   bool plan(const Pose2& robot);
   void abandon(int& counter, double now_s);
   [[nodiscard]] std::optional<Twist> escape(const Pose2& robot, const Twist& current) const;
+  /// The nearest cell to `target` (within goal_standoff_search_m) the dynamic window can stand
+  /// on: traversable globally, and clear of unknown cells by the window's radius on its grid.
+  [[nodiscard]] std::optional<Eigen::Vector2f> standoff(const Eigen::Vector2f& target) const;
+  /// Moves goal_ to standoff(goal_target_) if it is no longer such a cell; false if none.
+  bool recheck_goal();
 
   Profile profile_;
   ExplorerSettings settings_;
@@ -156,6 +175,7 @@ class Explorer {
   bool have_map_ = false;
   bool model_geometry_valid_ = false;
   std::optional<Pose2> goal_;
+  Eigen::Vector2f goal_target_{0.0f, 0.0f};  ///< the decision's goal before standoff() (blacklisting)
   std::vector<Eigen::Vector2f> path_;
   double goal_deadline_s_ = 0.0;
   double stuck_since_s_ = -1.0;

@@ -122,7 +122,7 @@ struct MappingSettings {
 ///   rays_per_sensor                  (the observation model's rays per sensor fan, [1, 10000])
 ///   cells:       {occupied_logodds, free_logodds}   (shared by observation and inflation)
 ///   observation: {backend: dda | embree, tile_cells}
-///   inflation:   {robot_radius_m, unknown_is_obstacle}   (also the dynamic window's radius;
+///   inflation:   {robot_radius_m, unknown_is_obstacle, uncertain_is_obstacle}   (also the dynamic window's radius;
 ///                 must be >= chassis.radius_m)
 ///   path:        {allow_diagonal, clearance_weight, clearance_decay_m, goal_tolerance_m}
 ///   frontier:    {min_cluster_cells, min_goal_distance_m, blacklist_radius_m}

@@ -1,0 +1,114 @@
+// Explorer (runtime/explorer.hpp) on hand-made grids: goals next to unknown space are moved to
+// a cell the dynamic window can stand on (global traversable, clear of unknown cells by the
+// window's radius), re-checked at map updates, and abandoned when no such cell is near.
+#include <duet/kernels/error.hpp>
+#include <duet/runtime/explorer.hpp>
+#include <duet/runtime/profile.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace {
+
+constexpr float kRes = 0.05f;
+
+// 5 x 3 m: known free for x < 4 m, never observed (NaN) beyond - one straight frontier.
+duet::OccupancyGrid half_known_room() {
+  duet::OccupancyGrid g(kRes, Eigen::Vector2f(0.0f, 0.0f), 100, 60);
+  for (int y = 0; y < g.height(); ++y)
+    for (int x = 0; x < 80; ++x) g.logodds()[g.index(x, y)] = -2.0f;
+  return g;
+}
+
+duet::Profile frontier_only_profile() {
+  duet::Profile p = duet::builtin_profile("dual_kinect_kobuki");
+  p.exploration.strategy.use_simulation = false;  // the frontier goal: a cell that borders unknown space
+  return p;
+}
+
+float needed_clearance(const duet::Profile& p) {
+  return p.exploration.dwa.robot_radius_m + p.exploration.dwa.safety_margin_m;
+}
+
+bool fits(const duet::Explorer& e, const duet::Pose2& goal, float needed) {
+  Eigen::Vector2i c;
+  if (!e.inflated().cell_of(Eigen::Vector2f(goal.x, goal.y), c)) return false;
+  const std::size_t i = e.inflated().index(c.x(), c.y());
+  return e.inflated().traversable[i] != 0 && e.local_grid().clearance_m[i] > needed;
+}
+
+TEST(Explorer, FrontierGoalIsMovedOffTheUnknownCells) {
+  const duet::Profile p = frontier_only_profile();
+  duet::Explorer e(p);
+  const duet::Pose2 robot{1.0f, 1.5f, 0.0f};
+  e.update_map(half_known_room(), robot, 0.0);
+  (void)e.control(robot, duet::Twist{}, 0.0);
+  ASSERT_TRUE(e.goal().has_value());
+  const duet::Pose2 decided = e.last_decision().goal;
+  const duet::Pose2 goal = *e.goal();
+  // The decision's goal is a frontier cell (last known-free column, x in [3.95, 4.0)).
+  EXPECT_GT(decided.x, 3.9f);
+  EXPECT_LT(decided.x, 4.0f);
+  // The goal the robot drives to is clear of the unknown cells (centres from x = 4.025) by the
+  // dynamic window's radius, and is the nearest such cell: one more cell towards the frontier
+  // would not be.
+  const float needed = needed_clearance(p);
+  EXPECT_TRUE(fits(e, goal, needed));
+  EXPECT_GT(4.025f - goal.x, needed);
+  EXPECT_LE(4.025f - goal.x, needed + kRes + 1e-4f);
+  EXPECT_NEAR(goal.y, decided.y, 0.5f * kRes + 1e-4f);
+  EXPECT_EQ(goal.theta, decided.theta);
+  EXPECT_EQ(e.stats().goals_moved, 1);
+  ASSERT_FALSE(e.path().empty());
+  EXPECT_NEAR(e.path().back().x(), goal.x, 1e-4f);
+  EXPECT_NEAR(e.path().back().y(), goal.y, 1e-4f);
+}
+
+TEST(Explorer, GoalIsMovedAgainWhenTheMapClosesAroundIt) {
+  const duet::Profile p = frontier_only_profile();
+  duet::Explorer e(p);
+  const duet::Pose2 robot{1.0f, 1.5f, 0.0f};
+  duet::OccupancyGrid g = half_known_room();
+  e.update_map(g, robot, 0.0);
+  (void)e.control(robot, duet::Twist{}, 0.0);
+  ASSERT_TRUE(e.goal().has_value());
+  const duet::Pose2 first = *e.goal();
+  // A newly seen obstacle 0.1 m in front of the goal, across the whole room.
+  const int wall_x = g.cell_of(Eigen::Vector2f(first.x + 0.1f, first.y)).x();
+  for (int y = 0; y < g.height(); ++y) g.logodds()[g.index(wall_x, y)] = 3.5f;
+  e.update_map(g, robot, 1.0);
+  ASSERT_TRUE(e.goal().has_value());
+  const float needed = needed_clearance(p);
+  EXPECT_TRUE(fits(e, *e.goal(), needed));
+  EXPECT_LT(e.goal()->x, first.x);
+  EXPECT_EQ(e.stats().goals_moved, 2);
+  EXPECT_EQ(e.stats().goals_abandoned_blocked, 0);
+}
+
+TEST(Explorer, GoalWithNoStandingRoomNearbyIsAbandoned) {
+  const duet::Profile p = frontier_only_profile();
+  duet::ExplorerSettings s;
+  s.goal_standoff_search_m = 0.0f;  // never move a goal: a frontier goal cannot be stood on
+  duet::Explorer e(p, s);
+  const duet::Pose2 robot{1.0f, 1.5f, 0.0f};
+  e.update_map(half_known_room(), robot, 0.0);
+  const duet::Twist cmd = e.control(robot, duet::Twist{}, 0.0);
+  EXPECT_FALSE(e.goal().has_value());
+  EXPECT_GE(e.stats().goals_abandoned_no_path, 1);
+  EXPECT_EQ(e.stats().goals_moved, 0);
+  EXPECT_EQ(cmd.v, 0.0f);
+  EXPECT_EQ(cmd.omega, 0.0f);
+}
+
+TEST(Explorer, InvalidStandoffSearchThrows) {
+  const duet::Profile p = frontier_only_profile();
+  for (const float bad : {-0.1f, 5.5f, std::numeric_limits<float>::quiet_NaN()}) {
+    duet::ExplorerSettings s;
+    s.goal_standoff_search_m = bad;
+    EXPECT_THROW(duet::Explorer(p, s), duet::Error) << bad;
+  }
+}
+
+}  // namespace
