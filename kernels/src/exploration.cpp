@@ -2,7 +2,11 @@
 #include <duet/kernels/error.hpp>
 #include <duet/kernels/exploration.hpp>
 
+#include <tbb/task_group.h>
+
 #include <cmath>
+#include <exception>
+#include <optional>
 #include <string>
 
 namespace duet {
@@ -33,21 +37,50 @@ ExplorationDecision decide_goal(const ObservationModel& model, const InflatedGri
   validate(s);
   ExplorationDecision d;
   d.goal = robot;
+  // With simulation, the frontier search (which reads only the inflated grid, the blacklist and
+  // its own workspace) runs as a concurrent task while Procedure 1 runs, so that a second thread
+  // is never idle during the simulation's serial parts and the fall-back costs no extra latency.
+  // Its result is used exactly as if it ran afterwards: only when the simulated goal is not
+  // taken (and discarded otherwise), so the decision is the same as the sequential one.
+  std::optional<FrontierResult> speculative;
+  std::exception_ptr speculative_error;
   if (s.use_simulation) {
-    d.simulation = partial_map_simulation(model, inflated, robot, sensors, s.simulation, ws.simulation);
+    tbb::task_group tg;
+    if (s.concurrent_frontier_search)
+      tg.run([&] {
+        try {
+          speculative = find_frontier(inflated, Eigen::Vector2f(robot.x, robot.y), blacklist, now_s, s.frontier, ws.frontier);
+        } catch (...) {
+          speculative_error = std::current_exception();  // rethrown only if the search's result is needed
+        }
+      });
+    try {
+      d.simulation = partial_map_simulation(model, inflated, robot, sensors, s.simulation, ws.simulation);
+    } catch (...) {
+      tg.wait();  // never leave the task running on the caller's data
+      throw;
+    }
+    tg.wait();
     d.reward_bits = d.simulation.reward_bits;
     if (d.simulation.found && d.simulation.reward_bits > s.eps_r_bits) {  // Fig. 6: R_g > eps_R
       const Eigen::Vector2f g(d.simulation.goal.x, d.simulation.goal.y);
       if (!blacklist.blocks(g, s.frontier.blacklist_radius_m, now_s)) {
         d.status = ExplorationStatus::kSimulatedGoal;
         d.goal = d.simulation.goal;
+        if (speculative) {  // it ran anyway: keep it for the caller (a failed search is simply not kept)
+          d.frontier = std::move(*speculative);
+          d.frontier_searched = true;
+        }
         return d;
       }
       d.simulated_goal_blacklisted = true;
     }
   }
   // Otherwise the global frontier search (§3.2).
-  d.frontier = find_frontier(inflated, Eigen::Vector2f(robot.x, robot.y), blacklist, now_s, s.frontier, ws.frontier);
+  if (speculative_error) std::rethrow_exception(speculative_error);
+  d.frontier = speculative ? std::move(*speculative)
+                           : find_frontier(inflated, Eigen::Vector2f(robot.x, robot.y), blacklist, now_s, s.frontier, ws.frontier);
+  d.frontier_searched = true;
   switch (d.frontier.status) {
     case FrontierStatus::kFound: {
       d.status = ExplorationStatus::kFrontierGoal;

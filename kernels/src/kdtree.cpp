@@ -17,10 +17,6 @@
 
 namespace duet {
 
-struct KdTree::Item {
-  Eigen::Vector3f p;
-  std::uint32_t id;
-};
 
 namespace {
 
@@ -40,6 +36,11 @@ struct KBest {
   const std::uint32_t* ids;
   KBest(int k_, float limit, std::uint64_t* key_, std::uint32_t* pos_, const std::uint32_t* ids_)
       : k(k_), worst_d(limit), key(key_), pos(pos_), ids(ids_) {}
+  // Resumes a list of `count_` candidates already in key_/pos_ (no limit).
+  KBest(int k_, int count_, std::uint64_t* key_, std::uint32_t* pos_, const std::uint32_t* ids_)
+      : k(k_), count(count_), worst_d(std::numeric_limits<float>::infinity()), key(key_), pos(pos_), ids(ids_) {
+    if (count == k) worst_d = std::bit_cast<float>(static_cast<std::uint32_t>(key[k - 1] >> 32));
+  }
   [[nodiscard]] float worst() const noexcept { return worst_d; }
   void offer(float dist, std::uint32_t p) noexcept {
     const std::uint64_t kk = static_cast<std::uint64_t>(std::bit_cast<std::uint32_t>(dist)) << 32 | ids[p];
@@ -58,11 +59,176 @@ struct KBest {
     pos[j] = p;
     if (count == k) worst_d = std::bit_cast<float>(static_cast<std::uint32_t>(key[k - 1] >> 32));
   }
+  // Drops the candidates farther than bound (known to hold k points: they cannot be among the
+  // k nearest); the list then prunes at bound until it is full again.
+  void trim(float bound) noexcept {
+    const int before = count;
+    while (count > 0 && std::bit_cast<float>(static_cast<std::uint32_t>(key[count - 1] >> 32)) > bound) --count;
+    if (count < before) worst_d = bound;
+  }
   int finish(float* dist2) const noexcept {
     for (int i = 0; i < count; ++i) dist2[i] = std::bit_cast<float>(static_cast<std::uint32_t>(key[i] >> 32));
     return count;
   }
 };
+
+// The best k candidates, unsorted, with the slot of the worst tracked: a candidate replaces the
+// worst and the worst is found again (k compares, no shifting); sorted once in finish(). The
+// same keys as KBest (distance bits above the input index), so the same set and order.
+struct KSet {
+  int k, count = 0;
+  int worst_i = 0;  // slot of the largest key when count == k
+  float worst_d;    // pruning distance: the k-th distance, or the limit while fewer than k
+  std::uint64_t* key;
+  std::uint32_t* pos;
+  const std::uint32_t* ids;
+  KSet(int k_, float limit, std::uint64_t* key_, std::uint32_t* pos_, const std::uint32_t* ids_)
+      : k(k_), worst_d(limit), key(key_), pos(pos_), ids(ids_) {}
+  // Resumes `count_` candidates already in key_/pos_ (no limit).
+  KSet(int k_, int count_, std::uint64_t* key_, std::uint32_t* pos_, const std::uint32_t* ids_)
+      : k(k_), count(count_), worst_d(std::numeric_limits<float>::infinity()), key(key_), pos(pos_), ids(ids_) {
+    if (count == k) refresh();
+  }
+  [[nodiscard]] float worst() const noexcept { return worst_d; }
+  void refresh() noexcept {
+    std::uint64_t mk = key[0];
+    int w = 0;
+    for (int i = 1; i < k; ++i) {
+      const bool gt = key[i] > mk;
+      mk = gt ? key[i] : mk;
+      w = gt ? i : w;
+    }
+    worst_i = w;
+    worst_d = std::bit_cast<float>(static_cast<std::uint32_t>(mk >> 32));
+  }
+  void offer(float dist, std::uint32_t p) noexcept {
+    const std::uint64_t kk = static_cast<std::uint64_t>(std::bit_cast<std::uint32_t>(dist)) << 32 | ids[p];
+    if (count < k) {
+      key[count] = kk;
+      pos[count] = p;
+      if (++count == k) refresh();
+      return;
+    }
+    if (kk >= key[worst_i]) return;
+    key[worst_i] = kk;
+    pos[worst_i] = p;
+    refresh();
+  }
+  // Drops the candidates farther than bound (known to hold k points: they cannot be among the
+  // k nearest); the set then prunes at bound until it is full again.
+  void trim(float bound) noexcept {
+    int c = 0;
+    for (int i = 0; i < count; ++i) {
+      if (std::bit_cast<float>(static_cast<std::uint32_t>(key[i] >> 32)) <= bound) {
+        key[c] = key[i];
+        pos[c] = pos[i];
+        ++c;
+      }
+    }
+    if (c < count) {
+      count = c;
+      worst_d = bound;
+    }
+  }
+  // Sorts the candidates nearest first (by key) if `sorted`, and writes their squared distances.
+  int finish(float* dist2, bool sorted) noexcept {
+    for (int i = 1; sorted && i < count; ++i) {
+      const std::uint64_t kk = key[i];
+      const std::uint32_t pp = pos[i];
+      int j = i;
+      while (j > 0 && key[j - 1] > kk) {
+        key[j] = key[j - 1];
+        pos[j] = pos[j - 1];
+        --j;
+      }
+      key[j] = kk;
+      pos[j] = pp;
+    }
+    for (int i = 0; i < count; ++i) dist2[i] = std::bit_cast<float>(static_cast<std::uint32_t>(key[i] >> 32));
+    return count;
+  }
+};
+
+// Offers the points at tree positions [a, b) to best. Eight distances at a time, then the few
+// candidates within the current k-th distance offered (one mostly-not-taken branch per eight
+// points). The SoA arrays are padded by KdTree::kPad entries, so the loads past b stay inside
+// them; those lanes are masked. Distances are dx^2 + (dy^2 + dz^2), the order of Eigen's
+// squaredNorm: identical values to (p - q).squaredNorm().
+template <class Best>
+inline void scan_points(const float* xs, const float* ys, const float* zs, std::uint32_t a, std::uint32_t b,
+                        const Eigen::Vector3f& q, Best& best) {
+#if defined(__SSE2__)
+  const __m128 qx = _mm_set1_ps(q.x()), qy = _mm_set1_ps(q.y()), qz = _mm_set1_ps(q.z());
+  for (std::uint32_t j0 = a; j0 < b; j0 += 8) {
+    alignas(16) float d[8];
+    for (int h = 0; h < 2; ++h) {
+      const __m128 dx = _mm_sub_ps(_mm_loadu_ps(xs + j0 + 4 * h), qx);
+      const __m128 dy = _mm_sub_ps(_mm_loadu_ps(ys + j0 + 4 * h), qy);
+      const __m128 dz = _mm_sub_ps(_mm_loadu_ps(zs + j0 + 4 * h), qz);
+      _mm_store_ps(d + 4 * h, _mm_add_ps(_mm_mul_ps(dx, dx), _mm_add_ps(_mm_mul_ps(dy, dy), _mm_mul_ps(dz, dz))));
+    }
+    const __m128 w = _mm_set1_ps(best.worst());
+    unsigned mask = static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(_mm_load_ps(d), w))) |
+                    static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(_mm_load_ps(d + 4), w))) << 4;
+    if (b - j0 < 8) mask &= (1u << (b - j0)) - 1u;
+    while (mask != 0) {
+      const std::uint32_t t = static_cast<std::uint32_t>(std::countr_zero(mask));
+      mask &= mask - 1;
+      if (d[t] <= best.worst()) best.offer(d[t], j0 + t);
+    }
+  }
+#else
+  for (std::uint32_t j = a; j < b; ++j) {
+    const float dx = xs[j] - q.x(), dy = ys[j] - q.y(), dz = zs[j] - q.z();
+    const float d = dx * dx + (dy * dy + dz * dz);
+    if (d <= best.worst()) best.offer(d, j);
+  }
+#endif
+}
+
+// Squared distance from q to the box [lo, hi] (0 inside), summed in the order of scan_points:
+// as rounding is monotone, it is never above the computed distance of a point in the box.
+inline float box_dist2(const Eigen::Vector3f& q, const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
+  const float ox = std::max({lo.x() - q.x(), q.x() - hi.x(), 0.0f});
+  const float oy = std::max({lo.y() - q.y(), q.y() - hi.y(), 0.0f});
+  const float oz = std::max({lo.z() - q.z(), q.z() - hi.z(), 0.0f});
+  return ox * ox + (oy * oy + oz * oz);
+}
+
+// Squared distance between the boxes [alo, ahi] and [blo, bhi]: never above the computed
+// distance of a point in one to a point in the other (as box_dist2).
+inline float box_box_dist2(const Eigen::Vector3f& alo, const Eigen::Vector3f& ahi, const Eigen::Vector3f& blo,
+                           const Eigen::Vector3f& bhi) {
+  const float ox = std::max({blo.x() - ahi.x(), alo.x() - bhi.x(), 0.0f});
+  const float oy = std::max({blo.y() - ahi.y(), alo.y() - bhi.y(), 0.0f});
+  const float oz = std::max({blo.z() - ahi.z(), alo.z() - bhi.z(), 0.0f});
+  return ox * ox + (oy * oy + oz * oz);
+}
+
+// Squared distances from q to n4 (a multiple of 4) boxes stored as structure of arrays
+// (lo x, y, z then hi x, y, z, n4 floats each) into out; the same values as box_dist2.
+inline void box_dists(const float* soa, std::size_t n4, const Eigen::Vector3f& q, float* out) {
+#if defined(__SSE2__)
+  const __m128 zero = _mm_setzero_ps();
+  __m128 qv[3] = {_mm_set1_ps(q.x()), _mm_set1_ps(q.y()), _mm_set1_ps(q.z())};
+  for (std::size_t c = 0; c < n4; c += 4) {
+    __m128 o2[3];
+    for (int d = 0; d < 3; ++d) {
+      const __m128 lo = _mm_loadu_ps(soa + static_cast<std::size_t>(d) * n4 + c);
+      const __m128 hi = _mm_loadu_ps(soa + static_cast<std::size_t>(d + 3) * n4 + c);
+      // max(lo - q, q - hi, 0), as std::max({...}) in box_dist2 (all operands finite or +-inf)
+      const __m128 o = _mm_max_ps(_mm_max_ps(_mm_sub_ps(lo, qv[d]), _mm_sub_ps(qv[d], hi)), zero);
+      o2[d] = _mm_mul_ps(o, o);
+    }
+    _mm_storeu_ps(out + c, _mm_add_ps(o2[0], _mm_add_ps(o2[1], o2[2])));
+  }
+#else
+  for (std::size_t c = 0; c < n4; ++c) {
+    const Eigen::Vector3f lo(soa[c], soa[n4 + c], soa[2 * n4 + c]), hi(soa[3 * n4 + c], soa[4 * n4 + c], soa[5 * n4 + c]);
+    out[c] = box_dist2(q, lo, hi);
+  }
+#endif
+}
 
 }  // namespace
 
@@ -74,18 +240,35 @@ void KdTree::build(PointsView points, const KdTreeSettings& settings) {
     fail(ErrorCode::kInvalidArgument, "KdTree: more than 2^31-2 points");
   leaf_size_ = settings.max_leaf_size;
   n_input_ = points.size();
-  std::vector<Item> items;
-  items.reserve(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3f p = points[i];
-    if (is_finite(p)) items.push_back({p, static_cast<std::uint32_t>(i)});
-  }
-  const auto m = static_cast<std::uint32_t>(items.size());
+  // The finite points in input order, by blocks in parallel (a count, then the copy at each
+  // block's offset: the same order for any thread count). items_ is kept between builds.
+  constexpr std::size_t kBlock = 16384;
+  const std::size_t nblocks = detail::block_count(points.size(), kBlock);
+  std::vector<std::uint32_t> block_start(nblocks + 1, 0);
+  detail::for_blocks(points.size(), kBlock, [&](std::size_t b, std::size_t begin, std::size_t end) {
+    std::uint32_t c = 0;
+    for (std::size_t i = begin; i < end; ++i) c += is_finite(points[i]) ? 1u : 0u;
+    block_start[b + 1] = c;
+  });
+  for (std::size_t b = 0; b < nblocks; ++b) block_start[b + 1] += block_start[b];
+  items_.resize(block_start[nblocks]);
+  Item* items = items_.data();
+  detail::for_blocks(points.size(), kBlock, [&](std::size_t b, std::size_t begin, std::size_t end) {
+    std::uint32_t o = block_start[b];
+    for (std::size_t i = begin; i < end; ++i) {
+      const Eigen::Vector3f p = points[i];
+      if (is_finite(p)) items[o++] = {p, static_cast<std::uint32_t>(i)};
+    }
+  });
+  const auto m = static_cast<std::uint32_t>(items_.size());
   nodes_.clear();
   // Splits leave at least a quarter of a node's points on each side, so leaves hold at least
   // ceil(leaf/4) points (unless the input is smaller): at most 2m/ceil(leaf/4) + 1 nodes.
   const std::size_t quarter = static_cast<std::size_t>((leaf_size_ + 3) / 4);
-  nodes_.resize(2 * (static_cast<std::size_t>(m) / quarter) + 3);
+  const std::size_t max_nodes = 2 * (static_cast<std::size_t>(m) / quarter) + 3;
+  nodes_.resize(max_nodes);
+  boxes_.resize(max_nodes);
+  parent_.resize(max_nodes);
   std::atomic<std::uint32_t> next{0};
 
   // Recursive build; node numbers come from an atomic counter (their order may vary between
@@ -101,6 +284,7 @@ void KdTree::build(PointsView points, const KdTreeSettings& settings) {
     std::uint32_t operator()(std::uint32_t begin, std::uint32_t end, Eigen::Vector3f lo, Eigen::Vector3f hi) const {
       const std::uint32_t idx = next.fetch_add(1, std::memory_order_relaxed);
       Node& node = t.nodes_[idx];
+      t.boxes_[idx] = {lo, begin, hi, end};
       const std::uint32_t count = end - begin;
       int dim;
       if (count > static_cast<std::uint32_t>(t.leaf_size_) && (hi - lo).maxCoeff(&dim) > 0.0f) {
@@ -157,6 +341,8 @@ void KdTree::build(PointsView points, const KdTreeSettings& settings) {
         node.dim = dim;
         node.a = l;
         node.b = r;
+        t.parent_[l] = idx;
+        t.parent_[r] = idx;
         return idx;
       }
       node.dim = -1;
@@ -166,28 +352,46 @@ void KdTree::build(PointsView points, const KdTreeSettings& settings) {
     }
   };
   if (m > 0) {
-    Eigen::Vector3f lo = items[0].p, hi = lo;
-    for (const Item& it : items) {
-      lo = lo.cwiseMin(it.p);
-      hi = hi.cwiseMax(it.p);
+    // Bounding box by blocks (min / max are exact: any grouping gives the same box).
+    const std::size_t mb = detail::block_count(m, kBlock);
+    std::vector<Eigen::Vector3f> blo(mb), bhi(mb);
+    detail::for_blocks(m, kBlock, [&](std::size_t b, std::size_t begin, std::size_t end) {
+      Eigen::Vector3f l = items[begin].p, h = l;
+      for (std::size_t i = begin; i < end; ++i) {
+        l = l.cwiseMin(items[i].p);
+        h = h.cwiseMax(items[i].p);
+      }
+      blo[b] = l;
+      bhi[b] = h;
+    });
+    Eigen::Vector3f lo = blo[0], hi = bhi[0];
+    for (std::size_t b = 1; b < mb; ++b) {
+      lo = lo.cwiseMin(blo[b]);
+      hi = hi.cwiseMax(bhi[b]);
     }
-    Builder{*this, items.data(), next, static_cast<std::uint32_t>(quarter)}(0, m, lo, hi);
+    Builder{*this, items, next, static_cast<std::uint32_t>(quarter)}(0, m, lo, hi);
+    parent_[0] = kNoHint;
   }
   nodes_.resize(next.load());
+  boxes_.resize(next.load());
+  parent_.resize(next.load());
   node_count_ = next.load();
   index_leaf_starts(m);
   pts_.resize(m);
   ids_.resize(m);
-  xs_.assign(m + kPad, 0.0f);
-  ys_.assign(m + kPad, 0.0f);
-  zs_.assign(m + kPad, 0.0f);
-  for (std::uint32_t i = 0; i < m; ++i) {
-    pts_[i] = items[i].p;
-    ids_[i] = items[i].id;
-    xs_[i] = items[i].p.x();
-    ys_[i] = items[i].p.y();
-    zs_[i] = items[i].p.z();
-  }
+  xs_.resize(m + kPad);
+  ys_.resize(m + kPad);
+  zs_.resize(m + kPad);
+  for (std::size_t i = m; i < m + kPad; ++i) xs_[i] = ys_[i] = zs_[i] = 0.0f;
+  detail::for_blocks(m, kBlock, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      pts_[i] = items[i].p;
+      ids_[i] = items[i].id;
+      xs_[i] = items[i].p.x();
+      ys_[i] = items[i].p.y();
+      zs_[i] = items[i].p.z();
+    }
+  });
 }
 
 int KdTree::knn_tree(const Eigen::Vector3f& q, int k, std::uint32_t* tree_pos, float* dist2) const {
@@ -236,37 +440,7 @@ int KdTree::knn_impl(const Eigen::Vector3f& q, int k, float max_dist2, std::uint
       while (true) {
         const Node& nd = nodes_[ni];
         if (nd.dim < 0) {
-          // Eight distances at a time, then the few candidates within the current k-th distance
-          // offered (one mostly-not-taken branch per eight points). The SoA arrays are padded by
-          // kPad entries, so the loads past the leaf's end stay inside them; those lanes are masked.
-#if defined(__SSE2__)
-          const __m128 qx = _mm_set1_ps(q.x()), qy = _mm_set1_ps(q.y()), qz = _mm_set1_ps(q.z());
-          for (std::uint32_t j0 = nd.a; j0 < nd.b; j0 += 8) {
-            alignas(16) float d[8];
-            for (int h = 0; h < 2; ++h) {
-              const __m128 dx = _mm_sub_ps(_mm_loadu_ps(xs_.data() + j0 + 4 * h), qx);
-              const __m128 dy = _mm_sub_ps(_mm_loadu_ps(ys_.data() + j0 + 4 * h), qy);
-              const __m128 dz = _mm_sub_ps(_mm_loadu_ps(zs_.data() + j0 + 4 * h), qz);
-              // dx^2 + (dy^2 + dz^2): the order of Eigen's squaredNorm, identical values
-              _mm_store_ps(d + 4 * h, _mm_add_ps(_mm_mul_ps(dx, dx), _mm_add_ps(_mm_mul_ps(dy, dy), _mm_mul_ps(dz, dz))));
-            }
-            const __m128 w = _mm_set1_ps(best.worst());
-            unsigned mask = static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(_mm_load_ps(d), w))) |
-                            static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(_mm_load_ps(d + 4), w))) << 4;
-            if (nd.b - j0 < 8) mask &= (1u << (nd.b - j0)) - 1u;
-            while (mask != 0) {
-              const std::uint32_t t = static_cast<std::uint32_t>(std::countr_zero(mask));
-              mask &= mask - 1;
-              if (d[t] <= best.worst()) best.offer(d[t], j0 + t);
-            }
-          }
-#else
-          for (std::uint32_t j = nd.a; j < nd.b; ++j) {
-            const float dx = xs_[j] - q.x(), dy = ys_[j] - q.y(), dz = zs_[j] - q.z();
-            const float d = dx * dx + (dy * dy + dz * dz);
-            if (d <= best.worst()) best.offer(d, j);
-          }
-#endif
+          scan_points(xs_.data(), ys_.data(), zs_.data(), nd.a, nd.b, q, best);
           break;
         }
         const float diff = q[nd.dim] - nd.split;
@@ -274,7 +448,9 @@ int KdTree::knn_impl(const Eigen::Vector3f& q, int k, float max_dist2, std::uint
         const std::uint32_t far = diff < 0.0f ? nd.b : nd.a;
         const float d2 = diff * diff;
         const float far_min = mindist - off[nd.dim] + d2;
-        if (far_min <= best.worst() * kPruneSlack && top < 128) {
+        // "not beyond" rather than "within": a NaN (inf - inf, when squared distances overflow)
+        // visits the cell instead of losing it.
+        if (!(far_min > best.worst() * kPruneSlack) && top < 128) {
           Frame g{far, far_min, {off[0], off[1], off[2]}};
           g.off[nd.dim] = d2;
           stack[top++] = g;
@@ -313,6 +489,7 @@ void KdTree::index_leaf_starts(std::uint32_t m) {
   // cell (the region its splits bound; unbounded sides are infinite).
   constexpr int kStartUp = 3;
   leaf_start_.clear();
+  leaf_node_.clear();
   leaf_of_.assign(m, 0);
   if (m == 0) return;
   constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -333,6 +510,7 @@ void KdTree::index_leaf_starts(std::uint32_t m) {
       const Visit& anc = path[path.size() > kStartUp ? path.size() - 1 - kStartUp : 0];
       const auto leaf = static_cast<std::uint32_t>(leaf_start_.size());
       leaf_start_.push_back({anc.node, anc.lo, anc.hi});
+      leaf_node_.push_back(it.node);
       for (std::uint32_t j = nd.a; j < nd.b; ++j) leaf_of_[j] = leaf;
       continue;
     }
@@ -345,6 +523,136 @@ void KdTree::index_leaf_starts(std::uint32_t m) {
     pending.push_back(r);
     pending.push_back(l);
   }
+}
+
+std::uint32_t KdTree::knn_leaf(std::size_t l, int k, LeafKnn& ws, bool sorted) const {
+  const Box& lb = boxes_[leaf_node_[l]];
+  const std::uint32_t begin = lb.begin, m = lb.end - lb.begin;
+  ws.count.assign(m, 0);
+  if (k <= 0) return m;
+  const std::size_t ku = static_cast<std::size_t>(k);
+  if (ws.keys.size() < m * ku) {
+    ws.keys.resize(m * ku);
+    ws.pos.resize(m * ku);
+    ws.dist2.resize(m * ku);
+  }
+  const std::uint32_t* ids = ids_.data();
+  const float *xs = xs_.data(), *ys = ys_.data(), *zs = zs_.data();
+  // Home: the leaf, or its smallest ancestor with at least k points.
+  std::uint32_t home = leaf_node_[l];
+  while (boxes_[home].end - boxes_[home].begin < static_cast<std::uint32_t>(k) && parent_[home] != kNoHint)
+    home = parent_[home];
+  const Box& hb = boxes_[home];
+  const std::uint32_t want = std::min(static_cast<std::uint32_t>(k), hb.end - hb.begin);
+  // Phase 1: each query's k nearest among the home's points. The previous query's k neighbours
+  // (home points too) bound its k-th distance, so the scan offers fewer candidates; the margin
+  // covers a different rounding of the same distance. r2: the largest k-th distance.
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  // Query order: a serpentine over a 6 x 3 grid of the leaf box's two longest axes (a counting
+  // sort), so consecutive queries are near each other and the previous one's neighbours bound
+  // the next one's k-th distance tightly. Any order gives the same results.
+  {
+    int dims[3] = {0, 1, 2};
+    const Eigen::Vector3f ext = lb.hi - lb.lo;
+    std::sort(dims, dims + 3, [&](int a, int b) { return ext[a] > ext[b] || (ext[a] == ext[b] && a < b); });
+    constexpr int kN1 = 6, kN2 = 3;
+    const int d1 = dims[0], d2 = dims[1];
+    const float s1 = ext[d1] > 0.0f ? kN1 / ext[d1] : 0.0f, s2 = ext[d2] > 0.0f ? kN2 / ext[d2] : 0.0f;
+    std::uint32_t start[kN1 * kN2 + 1] = {};
+    ws.bucket.resize(m);
+    for (std::uint32_t i = 0; i < m; ++i) {
+      const Eigen::Vector3f& p = pts_[begin + i];
+      // t > 0 is false for NaN (inf * 0 when the box extent overflows): bucket 0, no UB cast.
+      const float t1 = (p[d1] - lb.lo[d1]) * s1, t2 = (p[d2] - lb.lo[d2]) * s2;
+      const int b1 = t1 > 0.0f ? static_cast<int>(std::min(t1, static_cast<float>(kN1 - 1))) : 0;
+      int b2 = t2 > 0.0f ? static_cast<int>(std::min(t2, static_cast<float>(kN2 - 1))) : 0;
+      if (b1 & 1) b2 = kN2 - 1 - b2;
+      ws.bucket[i] = static_cast<std::uint8_t>(b1 * kN2 + b2);
+      ++start[ws.bucket[i] + 1];
+    }
+    for (int b = 0; b < kN1 * kN2; ++b) start[b + 1] += start[b];
+    ws.order.resize(m);
+    for (std::uint32_t i = 0; i < m; ++i) ws.order[start[ws.bucket[i]]++] = i;
+  }
+  float r2 = 0.0f;
+  for (std::uint32_t oi = 0; oi < m; ++oi) {
+    const std::uint32_t i = ws.order[oi];
+    const Eigen::Vector3f& q = pts_[begin + i];
+    std::uint64_t* key = ws.keys.data() + i * ku;
+    std::uint32_t* pos = ws.pos.data() + i * ku;
+    float bound = kInf;
+    if (oi > 0 && ws.count[ws.order[oi - 1]] == k) {
+      const std::uint32_t* prev = ws.pos.data() + ws.order[oi - 1] * ku;
+      float far = 0.0f;
+      for (int r = 0; r < k; ++r) far = std::max(far, (pts_[prev[r]] - q).squaredNorm());
+      bound = far * 1.0001f + std::numeric_limits<float>::min();
+    }
+    KSet best(k, bound, key, pos, ids);
+    scan_points(xs, ys, zs, hb.begin, hb.end, q, best);
+    if (static_cast<std::uint32_t>(best.count) < want) {  // cannot happen (the bound holds k points); be safe
+      best = KSet(k, kInf, key, pos, ids);
+      scan_points(xs, ys, zs, hb.begin, hb.end, q, best);
+    }
+    ws.count[i] = best.count;
+    r2 = std::max(r2, best.worst());
+  }
+  // Phase 2: the leaves outside home whose box is within r2 of this leaf's box may hold a nearer
+  // point for some query (a point's distance is at least its box's distance); each query scans
+  // those within its own k-th distance.
+  ws.cand.clear();
+  ws.stack.clear();
+  if (home != 0) ws.stack.push_back(0);
+  const float limit = r2 * kPruneSlack;
+  while (!ws.stack.empty()) {
+    const std::uint32_t n = ws.stack.back();
+    ws.stack.pop_back();
+    if (n == home) continue;
+    const Box& b = boxes_[n];
+    if (box_box_dist2(lb.lo, lb.hi, b.lo, b.hi) > limit) continue;
+    const Node& nd = nodes_[n];
+    if (nd.dim < 0) {
+      ws.cand.push_back(n);
+    } else {
+      ws.stack.push_back(nd.b);
+      ws.stack.push_back(nd.a);
+    }
+  }
+  // The candidates' boxes as structure of arrays, padded to a multiple of 4 with empty boxes
+  // (lo = +inf, hi = -inf: infinitely far): four box distances at a time.
+  const std::size_t nc = ws.cand.size(), nc4 = (nc + 3) & ~std::size_t{3};
+  ws.cbox.resize(7 * nc4 + 4);
+  float* cb = ws.cbox.data();
+  for (std::size_t c = 0; c < nc4; ++c) {
+    for (int d = 0; d < 3; ++d) {
+      cb[static_cast<std::size_t>(d) * nc4 + c] = c < nc ? boxes_[ws.cand[c]].lo[d] : kInf;
+      cb[static_cast<std::size_t>(d + 3) * nc4 + c] = c < nc ? boxes_[ws.cand[c]].hi[d] : -kInf;
+    }
+  }
+  float* cd = cb + 6 * nc4;
+  bool prev_full = false;
+  for (std::uint32_t oi = 0; oi < m; ++oi) {
+    const std::uint32_t i = ws.order[oi];
+    const Eigen::Vector3f& q = pts_[begin + i];
+    std::uint64_t* key = ws.keys.data() + i * ku;
+    std::uint32_t* pos = ws.pos.data() + i * ku;
+    KSet best(k, ws.count[i], key, pos, ids);
+    // The previous query's final k neighbours bound this one's k-th distance (as in phase 1).
+    if (prev_full && best.count == k) {
+      const std::uint32_t* prev = ws.pos.data() + ws.order[oi - 1] * ku;
+      float far = 0.0f;
+      for (int r = 0; r < k; ++r) far = std::max(far, (pts_[prev[r]] - q).squaredNorm());
+      best.trim(far * 1.0001f + std::numeric_limits<float>::min());
+    }
+    box_dists(cb, nc4, q, cd);
+    for (std::size_t c = 0; c < nc; ++c) {
+      if (cd[c] > best.worst() * kPruneSlack) continue;
+      const Box& b = boxes_[ws.cand[c]];
+      scan_points(xs, ys, zs, b.begin, b.end, q, best);
+    }
+    ws.count[i] = best.finish(ws.dist2.data() + i * ku, sorted);
+    prev_full = ws.count[i] == k;
+  }
+  return m;
 }
 
 int KdTree::knn(const Eigen::Vector3f& q, int k, std::uint32_t* idx, float* dist2) const {
@@ -381,7 +689,7 @@ std::size_t KdTree::radius(const Eigen::Vector3f& q, float radius, std::vector<s
     const std::uint32_t far = diff < 0.0f ? nd.b : nd.a;
     const float d2 = diff * diff;
     const float far_min = f.mindist - f.off[nd.dim] + d2;
-    if (far_min <= r2 * kPruneSlack) {
+    if (!(far_min > r2 * kPruneSlack)) {  // NaN (overflowing squares): visit
       Frame g = f;
       g.node = far;
       g.mindist = far_min;

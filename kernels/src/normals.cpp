@@ -161,33 +161,28 @@ void estimate_normals(PointsView points, const KdTree& tree, const NormalSetting
   }
   const int k = settings.k;
   const Eigen::Vector3f vp = settings.viewpoint;
-  // Queries in tree order: consecutive queries touch the same leaves (cache friendly); every
-  // result is written to its own input index, so the output is independent of the thread count.
-  detail::for_blocks(tp.size(), 1024, [&](std::size_t, std::size_t begin, std::size_t end) {
-    std::uint32_t pos[256];
-    float d2[256];
-    int prev = 0;  // neighbours of the previous query (tree positions in pos)
-    for (std::size_t j = begin; j < end; ++j) {
-      const Eigen::Vector3f& q = tp[j];
-      // The previous query's k neighbours are k points: the farthest of them from q bounds q's
-      // k-th distance, so the bounded search returns exactly the unbounded result. The margin
-      // covers a different rounding of the same distance in the search (e.g. FMA contraction).
-      float bound = std::numeric_limits<float>::infinity();
-      if (prev == k) {
-        float far = 0.0f;
-        for (int i = 0; i < k; ++i) far = std::max(far, (tp[pos[i]] - q).squaredNorm());
-        bound = far * 1.0001f + std::numeric_limits<float>::min();
+  // Queries leaf by leaf, in tree order (KdTree::knn_leaf: one batch per leaf bucket, the
+  // neighbours of all its points at once); every result is exact and written to its own input
+  // index, so the output is independent of the thread count and of the blocking.
+  const std::size_t leaves = tree.leaf_count();
+  detail::for_blocks(leaves, 32, [&](std::size_t, std::size_t lbegin, std::size_t lend) {
+    KdTree::LeafKnn ws;
+    for (std::size_t l = lbegin; l < lend; ++l) {
+      const std::uint32_t m = tree.knn_leaf(l, k, ws, /*sorted=*/false);  // Eq. (2) is a sum: any order
+      const std::uint32_t first = tree.leaf_begin(l);
+      for (std::uint32_t i = 0; i < m; ++i) {
+        const std::uint32_t j = first + i;
+        const Eigen::Vector3f& q = tp[j];
+        const std::uint32_t* pos = ws.pos.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(k);
+        Eigen::Vector3f nrm;
+        float curv;
+        if (normal_of(ws.count[i], [&](int r) -> const Eigen::Vector3f& { return tp[pos[r]]; }, nrm, curv)) {
+          if ((vp - q).dot(nrm) < 0.0f) nrm = -nrm;  // face the viewpoint (as PCL)
+        }
+        const std::uint32_t id = ids[j];
+        normals[id] = nrm;
+        if (!curvature.empty()) curvature[id] = curv;
       }
-      const int c = tree.knn_tree_near(q, k, bound, static_cast<std::uint32_t>(j), pos, d2);
-      prev = c;
-      Eigen::Vector3f nrm;
-      float curv;
-      if (normal_of(c, [&](int i) -> const Eigen::Vector3f& { return tp[pos[i]]; }, nrm, curv)) {
-        if ((vp - q).dot(nrm) < 0.0f) nrm = -nrm;  // face the viewpoint (as PCL)
-      }
-      const std::uint32_t i = ids[j];
-      normals[i] = nrm;
-      if (!curvature.empty()) curvature[i] = curv;
     }
   });
 }

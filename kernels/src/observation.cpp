@@ -379,6 +379,28 @@ struct ObservationModel::Impl {
     }
   }
 
+  /// Grids whose packed words exceed this are walked with software prefetching (prefetch_ray):
+  /// beyond the last-level private cache the walk waits for memory, within it prefetching only
+  /// costs instructions.
+  static constexpr std::size_t kPrefetchBytes = std::size_t{4} << 20;
+
+  /// Prefetches the cache lines (4 x 4-cell blocks) along origin + t*dir for t in [0, t1], one
+  /// every 3 cells of travel, so that the walk finds them in flight (memory-level parallelism
+  /// that the walk's own loads, a few cells ahead at most, do not have). A hint only.
+  void prefetch_ray(const Eigen::Vector2f& o, const Eigen::Vector2f& d, float t1) const noexcept {
+    const float inv = 1.0f / view.resolution_m;
+    const float px = (o.x() - view.origin.x()) * inv, py = (o.y() - view.origin.y()) * inv;
+    const float ux = d.x() * 3.0f, uy = d.y() * 3.0f;
+    const int n = static_cast<int>(t1 * inv / 3.0f) + 1;
+    const std::uint32_t* const cells = packed.data();
+    const auto w = static_cast<float>(view.width), h = static_cast<float>(view.height);
+    for (int k = 0; k <= n; ++k) {
+      const float x = px + ux * static_cast<float>(k), y = py + uy * static_cast<float>(k);
+      if (!(x >= 0.0f && y >= 0.0f && x < w && y < h)) continue;
+      __builtin_prefetch(cells + packed_index(static_cast<unsigned>(x), static_cast<unsigned>(y)));
+    }
+  }
+
   /// observe_dda() with the min-range rule folded into the same walk: the walk starts at the
   /// sensor (t = 0); a known obstacle in a cell left at or before t0 blocks the ray (entropy 0,
   /// cells 0, hit at that cell's entry); the cells from t0 on are summed as observe_dda() does.
@@ -389,33 +411,48 @@ struct ObservationModel::Impl {
     detail::CellWalk w;
     if (!w.init(view, o, d, 0.0f, t1)) return r;
     const auto t_min = static_cast<std::int64_t>(static_cast<double>(t0) / w.inv_scale + 0.5);
+    // The walk's state in locals (so that the loop does not spill it); same arithmetic as
+    // CellWalk::step. (A branch-free, mask-based step measured slower here: the x/y pattern of
+    // a ray is regular enough for the branch predictor, and a predicted branch cuts the chain.)
     const std::uint32_t* const cells = packed.data();
-    const unsigned width = static_cast<unsigned>(view.width), height = static_cast<unsigned>(view.height);
+    const std::uint64_t width = static_cast<unsigned>(view.width), height = static_cast<unsigned>(view.height);
+    const std::int64_t sx = w.sx, sy = w.sy, dx = w.dx, dy = w.dy, end = w.end;
+    std::int64_t ix = w.ix, iy = w.iy, mx = w.mx, my = w.my;
     std::int64_t entered = -1;
     for (;;) {  // cells before the min range: only a known obstacle matters
-      const std::int64_t tn = w.next();
-      if (tn > t_min || tn >= w.end) break;  // this cell reaches beyond t0: it is observed
-      const bool inside = static_cast<unsigned>(w.ix) < width && static_cast<unsigned>(w.iy) < height;
-      if (inside && (cells[packed_index(static_cast<unsigned>(w.ix), static_cast<unsigned>(w.iy))] & kOccupiedBit))
+      const std::int64_t tn = mx < my ? mx : my;  // exit time of this cell
+      if (tn > t_min || tn >= end) break;         // this cell reaches beyond t0: it is observed
+      const bool inside = static_cast<std::uint64_t>(ix) < width && static_cast<std::uint64_t>(iy) < height;
+      if (inside && (cells[packed_index(static_cast<unsigned>(ix), static_cast<unsigned>(iy))] & kOccupiedBit))
         return RayObservation{0.0f, entered < 0 ? 0.0f : w.time(entered), true, 0};
       entered = tn;
-      w.step();
+      const bool bx = mx <= my, by = my <= mx;
+      ix += bx ? sx : 0;
+      iy += by ? sy : 0;
+      mx += bx ? dx : 0;
+      my += by ? dy : 0;
     }
+    w.ix = static_cast<int>(ix);
+    w.iy = static_cast<int>(iy);
+    w.mx = mx;
+    w.my = my;
     return sum_walk(w, t0, t1);
   }
 
   /// Sums the entropy from the walk's current cell (entered at t0) to the hit or the walk's end.
-  [[nodiscard]] RayObservation sum_walk(detail::CellWalk& w, float t0, float t1) const noexcept {
+  [[nodiscard]] RayObservation sum_walk(const detail::CellWalk& w, float t0, float t1) const noexcept {
     RayObservation r{0.0f, t1, false, 0};
     std::uint64_t sum = 0;
     std::int32_t n = 0;
     const std::uint32_t* const cells = packed.data();
-    const unsigned width = static_cast<unsigned>(view.width), height = static_cast<unsigned>(view.height);
+    const std::uint64_t width = static_cast<unsigned>(view.width), height = static_cast<unsigned>(view.height);
+    const std::int64_t sx = w.sx, sy = w.sy, dx = w.dx, dy = w.dy, end = w.end;
+    std::int64_t ix = w.ix, iy = w.iy, mx = w.mx, my = w.my;
     std::int64_t entered = -1;  // entry time of the current cell (fixed point); -1: t0
     for (;;) {
-      const bool inside = static_cast<unsigned>(w.ix) < width && static_cast<unsigned>(w.iy) < height;
+      const bool inside = static_cast<std::uint64_t>(ix) < width && static_cast<std::uint64_t>(iy) < height;
       const std::uint32_t wd =
-          inside ? cells[packed_index(static_cast<unsigned>(w.ix), static_cast<unsigned>(w.iy))] : kUnknownWord;
+          inside ? cells[packed_index(static_cast<unsigned>(ix), static_cast<unsigned>(iy))] : kUnknownWord;
       sum += word_entropy(wd);
       ++n;
       if (wd & kOccupiedBit) {
@@ -423,10 +460,14 @@ struct ObservationModel::Impl {
         r.range_m = entered < 0 ? t0 : w.time(entered);
         break;
       }
-      const std::int64_t tn = w.next();
-      if (tn >= w.end) break;
+      const std::int64_t tn = mx < my ? mx : my;  // exit time of this cell
+      if (tn >= end) break;
       entered = tn;
-      w.step();
+      const bool bx = mx <= my, by = my <= mx;
+      ix += bx ? sx : 0;
+      iy += by ? sy : 0;
+      mx += bx ? dx : 0;
+      my += by ? dy : 0;
     }
     r.entropy_bits = bits_of(sum);
     r.cells = n;
@@ -654,9 +695,11 @@ void ObservationModel::observe(std::span<const Pose2> poses, std::span<const Sen
     RayObservation* o = out.data() + p * total + first[si];
     const float c = std::cos(pose.theta), sn = std::sin(pose.theta);
     if (dda) {
+      const bool prefetch = m.packed.size() * sizeof(std::uint32_t) > Impl::kPrefetchBytes;
       for (int r = 0; r < s.rays; ++r) {
         Eigen::Vector2f org, dir;
         fan_ray(pose, s, c, sn, r, org, dir);
+        if (prefetch) m.prefetch_ray(org, dir, s.max_range_m);
         o[r] = m.observe_dda_from_sensor(org, dir, s.min_range_m, s.max_range_m);
       }
       return;

@@ -177,7 +177,11 @@ void Explorer::decide(const Pose2& robot, double now_s) {
     const auto t0 = std::chrono::steady_clock::now();
     decision_ = decide_goal(model_, inflated_, robot, sectors_, blacklist_, now_s, s, ws_);
     if (settings_.stop_when_no_frontier && decision_.status == ExplorationStatus::kSimulatedGoal) {
-      decision_.frontier = find_frontier(inflated_, Eigen::Vector2f(robot.x, robot.y), blacklist_, now_s, s.frontier, ws_.frontier);
+      // The search ran concurrently with the simulation (concurrent_frontier_search); else run it.
+      if (!decision_.frontier_searched) {
+        decision_.frontier = find_frontier(inflated_, Eigen::Vector2f(robot.x, robot.y), blacklist_, now_s, s.frontier, ws_.frontier);
+        decision_.frontier_searched = true;
+      }
       if (decision_.frontier.status == FrontierStatus::kNoFrontier) decision_.status = ExplorationStatus::kNoFrontier;
       else if (decision_.frontier.status == FrontierStatus::kAllUnreachable) decision_.status = ExplorationStatus::kAllUnreachable;
       else if (decision_.frontier.status == FrontierStatus::kAllBlacklisted) decision_.status = ExplorationStatus::kAllBlacklisted;

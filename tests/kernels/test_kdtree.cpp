@@ -8,6 +8,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
 #include <random>
 #include <vector>
 
@@ -366,6 +369,151 @@ TEST(KdTree, IdenticalWithOneAndTwoThreads) {
     ASSERT_TRUE(std::equal(da, da + 10, db));
   }
   for (std::size_t qi = 0; qi < 5; ++qi) check_knn(a, pts, queries[qi], 10);
+}
+
+// knn_leaf against knn_tree for every indexed point: the same neighbours in the same order (sorted)
+// or the same set (unsorted), for every leaf of the tree.
+void check_knn_leaf(const KdTree& tree, int k, const char* what) {
+  SCOPED_TRACE(std::string(what) + " k " + std::to_string(k));
+  ASSERT_EQ(tree.leaf_count() == 0, tree.indexed_size() == 0);
+  std::uint32_t next = 0;  // the leaves cover [0, indexed_size()) in order
+  KdTree::LeafKnn ws, wu;
+  const auto tp = tree.tree_points();
+  const std::size_t ku = static_cast<std::size_t>(std::max(k, 0));
+  std::vector<std::uint32_t> want_pos(std::max<std::size_t>(ku, 1));
+  std::vector<float> want_d2(std::max<std::size_t>(ku, 1));
+  for (std::size_t l = 0; l < tree.leaf_count(); ++l) {
+    ASSERT_EQ(tree.leaf_begin(l), next);
+    ASSERT_GT(tree.leaf_end(l), tree.leaf_begin(l));
+    next = tree.leaf_end(l);
+    const std::uint32_t m = tree.knn_leaf(l, k, ws);
+    ASSERT_EQ(tree.knn_leaf(l, k, wu, /*sorted=*/false), m);
+    ASSERT_EQ(m, tree.leaf_end(l) - tree.leaf_begin(l));
+    for (std::uint32_t i = 0; i < m; ++i) {
+      const std::uint32_t j = tree.leaf_begin(l) + i;
+      const int want = tree.knn_tree(tp[j], k, want_pos.data(), want_d2.data());
+      ASSERT_EQ(ws.count[i], want) << "leaf " << l << " query " << j;
+      ASSERT_EQ(wu.count[i], want) << "leaf " << l << " query " << j;
+      for (int r = 0; r < want; ++r) {
+        ASSERT_EQ(ws.pos[i * ku + static_cast<std::size_t>(r)], want_pos[static_cast<std::size_t>(r)])
+            << "leaf " << l << " query " << j << " rank " << r;
+        ASSERT_EQ(ws.dist2[i * ku + static_cast<std::size_t>(r)], want_d2[static_cast<std::size_t>(r)]);
+      }
+      // Unsorted: the same set, each with its own distance.
+      std::vector<std::pair<float, std::uint32_t>> got;
+      for (int r = 0; r < want; ++r)
+        got.emplace_back(wu.dist2[i * ku + static_cast<std::size_t>(r)], wu.pos[i * ku + static_cast<std::size_t>(r)]);
+      for (const auto& [d, p] : got) ASSERT_EQ(d, (tp[p] - tp[j]).squaredNorm());
+      std::vector<std::uint32_t> gp, wp(want_pos.begin(), want_pos.begin() + want);
+      for (const auto& g : got) gp.push_back(g.second);
+      std::sort(gp.begin(), gp.end());
+      std::sort(wp.begin(), wp.end());
+      ASSERT_EQ(gp, wp) << "leaf " << l << " query " << j;
+    }
+  }
+  ASSERT_EQ(next, tree.indexed_size());
+}
+
+// A noisy surface (a wavy sheet, as depth data: points on a 2D manifold with density changes).
+std::vector<Eigen::Vector3f> wavy_sheet(std::size_t n, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::normal_distribution<float> g(0.0f, 0.002f);
+  std::vector<Eigen::Vector3f> p(n);
+  for (auto& q : p) {
+    const float x = u(rng), y = u(rng) * (x > 0.0f ? 0.3f : 1.0f);  // denser where x > 0
+    q = Eigen::Vector3f(x, y, 0.1f * std::sin(4.0f * x) * std::cos(3.0f * y) + g(rng));
+  }
+  return p;
+}
+
+TEST(KdTree, LeafBatchKnnEqualsKnn) {
+  // knn_leaf (the batch used by the normals) gives exactly knn_tree's result for every point:
+  // lattice ties and duplicates, NaN points, random clouds, a dense surface; leaf sizes from 1
+  // (homes are ancestors) to larger than k; k from 1 to more than a leaf holds.
+  const auto lattice = lattice_cloud(3000, 91);
+  const auto random = test::random_points(2500, 92, -1.0f, 1.0f);
+  const auto sheet = wavy_sheet(4000, 93);
+  for (const int leaf : {1, 3, 8, 32, 48, 200}) {
+    KdTreeSettings s;
+    s.max_leaf_size = leaf;
+    const KdTree tl(lattice, s), tr(random, s), ts(sheet, s);
+    for (const int k : {1, 3, 10, 33}) {
+      check_knn_leaf(tl, k, ("lattice leaf " + std::to_string(leaf)).c_str());
+      check_knn_leaf(tr, k, ("random leaf " + std::to_string(leaf)).c_str());
+      check_knn_leaf(ts, k, ("sheet leaf " + std::to_string(leaf)).c_str());
+    }
+  }
+}
+
+TEST(KdTree, LeafBatchKnnEdgeCases) {
+  // Empty tree, all NaN, one point, fewer points than k (the home is the root), k = 0,
+  // coordinates whose squared distances overflow to infinity (ties at inf, broken by index).
+  const KdTree empty;
+  EXPECT_EQ(empty.leaf_count(), 0u);
+  const std::vector<Eigen::Vector3f> nan(40, Eigen::Vector3f(kNaN, 0, 0));
+  const KdTree all_nan(nan);
+  EXPECT_EQ(all_nan.leaf_count(), 0u);
+  std::vector<Eigen::Vector3f> one = nan;
+  one[7] = Eigen::Vector3f(1, 2, 3);
+  const KdTree t1(one);
+  ASSERT_EQ(t1.leaf_count(), 1u);
+  KdTree::LeafKnn ws;
+  ASSERT_EQ(t1.knn_leaf(0, 10, ws), 1u);
+  EXPECT_EQ(ws.count[0], 1);
+  EXPECT_EQ(ws.pos[0], 0u);
+  EXPECT_EQ(ws.dist2[0], 0.0f);
+  ASSERT_EQ(t1.knn_leaf(0, 0, ws), 1u);
+  EXPECT_EQ(ws.count[0], 0);
+  const auto few = test::random_points(7, 94);
+  for (const int leaf : {1, 2, 32}) {
+    KdTreeSettings s;
+    s.max_leaf_size = leaf;
+    const KdTree t(few, s);
+    for (const int k : {1, 6, 7, 8, 50}) check_knn_leaf(t, k, "few");
+  }
+  std::vector<Eigen::Vector3f> huge = test::random_points(300, 95, -1.0f, 1.0f);
+  for (std::size_t i = 0; i < huge.size(); i += 3) huge[i] *= 1e25f;
+  for (const int leaf : {4, 48}) {
+    KdTreeSettings s;
+    s.max_leaf_size = leaf;
+    const KdTree t(huge, s);
+    check_knn_leaf(t, 10, "huge");
+    // knn() itself against brute force there (a split-plane distance of inf - inf once pruned
+    // whole subtrees).
+    for (std::size_t qi = 0; qi < huge.size(); qi += 10) check_knn(t, huge, huge[qi], 10);
+  }
+  // Near the float maximum: box extents overflow to inf too.
+  std::vector<Eigen::Vector3f> extreme = test::random_points(200, 97, -1.0f, 1.0f);
+  for (std::size_t i = 0; i < extreme.size(); i += 4) extreme[i] *= 3e38f;
+  KdTreeSettings s8;
+  s8.max_leaf_size = 8;
+  const KdTree te(extreme, s8);
+  check_knn_leaf(te, 10, "extreme");
+  for (std::size_t qi = 0; qi < extreme.size(); qi += 10) check_knn(te, extreme, extreme[qi], 10);
+}
+
+TEST(KdTree, LeafBatchKnnIdenticalWithOneAndTwoThreads) {
+  // knn_leaf itself is serial; the tree it reads must be the same when built with 1 or 2 threads
+  // (> 16384 points: the parallel build), so the batch results are too.
+  const auto pts = wavy_sheet(40000, 96);
+  const auto build = [&] {
+    KdTree t(pts);
+    return t;
+  };
+  const KdTree a = test::in_arena(1, build);
+  const KdTree b = test::in_arena(2, build);
+  ASSERT_EQ(a.leaf_count(), b.leaf_count());
+  KdTree::LeafKnn wa, wb;
+  for (std::size_t l = 0; l < a.leaf_count(); l += 7) {
+    ASSERT_EQ(a.leaf_begin(l), b.leaf_begin(l));
+    const std::uint32_t m = a.knn_leaf(l, 10, wa, false);
+    ASSERT_EQ(b.knn_leaf(l, 10, wb, false), m);
+    for (std::uint32_t i = 0; i < m; ++i) {
+      ASSERT_EQ(wa.count[i], wb.count[i]);
+      for (std::size_t r = 0; r < 10; ++r) ASSERT_EQ(wa.pos[i * 10 + r], wb.pos[i * 10 + r]);
+    }
+  }
 }
 
 }  // namespace

@@ -85,9 +85,9 @@ double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 
 // Compares estimate_normals with the reference at every `every`-th point.
 void compare_with_reference(const std::vector<Eigen::Vector3f>& pts, int k, const Eigen::Vector3f& vp, std::size_t every = 1,
-                            const char* name = "") {
-  SCOPED_TRACE(std::string(name) + " k " + std::to_string(k));
-  const KdTree tree(pts);
+                            const char* name = "", const KdTreeSettings& tree_settings = {}) {
+  SCOPED_TRACE(std::string(name) + " k " + std::to_string(k) + " leaf " + std::to_string(tree_settings.max_leaf_size));
+  const KdTree tree(pts, tree_settings);
   std::vector<Eigen::Vector3f> normals(pts.size());
   std::vector<float> curv(pts.size());
   NormalSettings s;
@@ -146,6 +146,23 @@ TEST(Normals, MatchBruteForceReferenceOnSyntheticClouds) {
   for (std::size_t i = 0; i < cube.size(); i += 9) cube[i] = cube[i / 3];
   for (std::size_t i = 4; i < cube.size(); i += 50) cube[i].z() = kNaN;
   compare_with_reference(cube, 10, Eigen::Vector3f(0, 0, -3), 1, "cube");
+}
+
+TEST(Normals, MatchBruteForceReferenceWithAnyLeafSize) {
+  // The normals come from the tree's leaf batches (KdTree::knn_leaf): leaves of one point (every
+  // batch's home is an ancestor), of fewer points than k, and larger than the cloud part they
+  // cover must all give the reference's neighbourhoods.
+  auto sphere = noisy_sphere(test::full_or<std::size_t>(900, 500), 11, 0.5f, 0.002f);
+  sphere[17] = Eigen::Vector3f(kNaN, 0, 0);
+  for (const int leaf : {1, 7, 200, 1024}) {
+    KdTreeSettings ts;
+    ts.max_leaf_size = leaf;
+    compare_with_reference(sphere, 10, Eigen::Vector3f::Zero(), 1, "sphere", ts);
+    compare_with_reference(sphere, 3, Eigen::Vector3f(5, 5, 5), 3, "sphere", ts);
+  }
+  // Fewer points than k: every point's neighbourhood is the whole cloud.
+  const auto tiny = test::random_points(6, 12, -1.0f, 1.0f);
+  compare_with_reference(tiny, 10, Eigen::Vector3f::Zero(), 1, "tiny");
 }
 
 TEST(Normals, MatchBruteForceReferenceOnRealData) {

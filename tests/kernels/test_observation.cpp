@@ -534,6 +534,21 @@ TEST(ObservationModel, HandMadeGridsMatchReference) {
   }
 }
 
+// A grid larger than the DDA's prefetching threshold (4 MiB of packed words: 1100 x 1100 cells),
+// so observe() takes its prefetching path; rays from poses in and around the grid (prefetch
+// points outside the grid are skipped): the same results as the reference.
+TEST(ObservationModel, LargeGridWithPrefetchingMatchesReference) {
+  TestGrid g(1100, 1100, 0.05f, Eigen::Vector2f(-3.0f, 2.0f), kFree);
+  std::mt19937 rng(23);
+  std::uniform_int_distribution<int> c(0, 1099), kind(0, 3);
+  for (int k = 0; k < 60000; ++k) g.at(c(rng), c(rng)) = kind(rng) == 0 ? kOcc : kind(rng) == 1 ? kNaN : -0.3f;
+  ObservationModel m(settings_for(ObservationBackend::kDda));
+  m.set_grid(g.view());
+  const auto st = expect_matches_reference(m, g, random_poses(g, 64, 29, false, 3.0f), paper_dual_sensors(30), "large");
+  EXPECT_GT(st.hits, st.rays / 10);
+  EXPECT_LT(st.hits, st.rays);
+}
+
 TEST(ObservationModel, KnownValues) {
   for (const auto b : kBackends) {
     // All unknown: every cell 1 bit, no hit, ranges = max range.

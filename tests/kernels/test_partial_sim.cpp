@@ -8,6 +8,7 @@
 #include <tbb/task_arena.h>
 
 #include <cmath>
+#include <random>
 #include <set>
 #include <vector>
 
@@ -140,13 +141,9 @@ TEST(PartialSim, SameResultWithOneAndTwoThreads) {
   EXPECT_NE(r4.weights, r1.weights);
 }
 
-// Lines 10-17 against a hand computation: one particle, one deterministic straight motion, one
-// sample, no noise, every cell within sensor range known free at l = -0.4: the reward is the
-// number of distinct cells the fans cross times E(-0.4) - E(-0.8).
-TEST(PartialSim, RewardMatchesHandComputationOnKnownFreeCells) {
-  TestGrid g(400, 400);
-  g.fill(0, 0, 400, 400, -0.4f);
-  Prepared p(g);
+// One iteration, one particle, one observation sample, one 1 s stage straight ahead at 1 m/s,
+// no l_ISM noise: the settings of the hand computations below.
+PartialSimSettings one_straight_sample() {
   PartialSimSettings s;
   s.iterations = 1;
   s.particles = 1;
@@ -156,6 +153,16 @@ TEST(PartialSim, RewardMatchesHandComputationOnKnownFreeCells) {
   s.v_min_mps = s.v_max_mps = 1.0f;
   s.omega_max_rps = 0.0f;
   s.ism_noise_logodds = 0.0f;
+  return s;
+}
+// Lines 10-17 against a hand computation: one particle, one deterministic straight motion, one
+// sample, no noise, every cell within sensor range known free at l = -0.4: the reward is the
+// number of distinct cells the fans cross times E(-0.4) - E(-0.8).
+TEST(PartialSim, RewardMatchesHandComputationOnKnownFreeCells) {
+  TestGrid g(400, 400);
+  g.fill(0, 0, 400, 400, -0.4f);
+  Prepared p(g);
+  const PartialSimSettings s = one_straight_sample();
   const Pose2 robot{10.0f, 10.0f, 0.7f};
   const auto sensors = paper_dual_sensors(30);
   PartialSimWorkspace ws;
@@ -176,6 +183,102 @@ TEST(PartialSim, RewardMatchesHandComputationOnKnownFreeCells) {
   }
   const double per_cell = static_cast<double>(entropy_bits(-0.4f)) - static_cast<double>(entropy_bits(-0.8f));
   EXPECT_NEAR(r.reward_bits, per_cell * static_cast<double>(cells.size()), 1e-3 * per_cell * static_cast<double>(cells.size()));
+}
+
+// The same hand computation where the walks jump: known free space at the clamp (reward exactly
+// 0, skipped by the walks in block-sized jumps) with 2 x 2 islands of cells at l = -0.4 scattered
+// over it (fixed seed). A jump must land exactly where the cell-by-cell walk would be: the reward
+// counts every island cell the fans cross (walk_cells, the reference DDA), no more, no fewer.
+TEST(PartialSim, JumpsOverClampedFreeSpaceMissNoCell) {
+  for (const float theta : {0.7f, 0.0f, -1.1f, 2.6f}) {  // diagonal and axis-parallel fans
+    TestGrid g(400, 400);
+    g.fill(0, 0, 400, 400, kFreeL);
+    std::mt19937 rng(5);
+    std::uniform_int_distribution<int> pos(0, 398);
+    for (int i = 0; i < 600; ++i) {
+      const int x = pos(rng), y = pos(rng);
+      g.fill(x, y, x + 2, y + 2, -0.4f);
+    }
+    Prepared p(g);
+    const PartialSimSettings s = one_straight_sample();
+    const Pose2 robot{10.02f, 9.97f, theta};
+    const auto sensors = paper_dual_sensors(30);
+    PartialSimWorkspace ws;
+    const PartialSimResult r = partial_map_simulation(p.model, p.inflated, robot, sensors, s, ws);
+    const Pose2 x1 = motion_step(robot, Twist{1.0f, 0.0f}, 1.0f);
+    std::set<std::pair<int, int>> cells;  // distinct island cells crossed (the reward)
+    std::int64_t crossings = 0;           // island cells crossed, ray by ray (the walks' visits)
+    for (const SensorSector& sec : sensors) {
+      std::vector<Eigen::Vector2f> o(static_cast<std::size_t>(sec.rays)), d(static_cast<std::size_t>(sec.rays));
+      sector_rays(x1, sec, o, d);
+      for (std::size_t i = 0; i < o.size(); ++i)
+        walk_cells(g.view(), o[i], d[i], sec.min_range_m, sec.max_range_m, [&](int ix, int iy, float, float) {
+          if (g.view().in_bounds(ix, iy) && g.at(ix, iy) == -0.4f) {
+            cells.insert({ix, iy});
+            ++crossings;
+          }
+          return true;
+        });
+    }
+    ASSERT_GT(cells.size(), 20u) << "the fans must cross islands for this test to mean anything";
+    ASSERT_TRUE(r.found);
+    EXPECT_EQ(r.cells_visited, crossings) << "theta " << theta;
+    const double per_cell = static_cast<double>(entropy_bits(-0.4f)) - static_cast<double>(entropy_bits(-0.8f));
+    EXPECT_NEAR(r.reward_bits, per_cell * static_cast<double>(cells.size()), 1e-3 * per_cell) << "theta " << theta;
+  }
+}
+
+// The frontier search run concurrently with the simulation (the default) gives the very decision
+// of the sequential order, in both branches of Fig. 6 and with 1 and 2 threads.
+TEST(Exploration, ConcurrentFrontierSearchGivesTheSequentialDecision) {
+  const TestGrid g = door_room();
+  Prepared p(g);
+  const auto sensors = paper_dual_sensors(30);
+  GoalBlacklist bl;
+  for (const float eps_r : {1.0f, 1e9f}) {  // simulated goal taken / frontier fall-back
+    ExplorationDecision ref;
+    bool have_ref = false;
+    for (const bool concurrent : {false, true})
+      for (const int threads : {1, 2}) {
+        ExplorationSettings s;
+        s.eps_r_bits = eps_r;
+        s.concurrent_frontier_search = concurrent;
+        ExplorationDecision d;
+        tbb::task_arena(threads).execute([&] {
+          ExplorationWorkspace ws;
+          d = decide_goal(p.model, p.inflated, Pose2{2.0f, 5.0f, 0.3f}, sensors, bl, 0.0, s, ws);
+        });
+        if (!have_ref) {
+          ref = d;
+          have_ref = true;
+          EXPECT_EQ(ref.status, eps_r > 1e8f ? ExplorationStatus::kFrontierGoal : ExplorationStatus::kSimulatedGoal)
+              << to_string(ref.status);
+          continue;
+        }
+        EXPECT_EQ(d.status, ref.status);
+        EXPECT_EQ(d.goal.x, ref.goal.x);
+        EXPECT_EQ(d.goal.y, ref.goal.y);
+        EXPECT_EQ(d.goal.theta, ref.goal.theta);
+        EXPECT_EQ(d.reward_bits, ref.reward_bits);
+        EXPECT_EQ(d.simulation.weights, ref.simulation.weights);
+        if (eps_r > 1e8f) {  // the frontier branch: the search is the decision's, either way
+          EXPECT_TRUE(d.frontier_searched);
+          EXPECT_EQ(d.frontier.status, ref.frontier.status);
+          EXPECT_EQ(d.frontier.path.size(), ref.frontier.path.size());
+          EXPECT_EQ(d.frontier.goal_xy, ref.frontier.goal_xy);
+        } else {  // the simulated goal: the concurrent search is kept, the sequential one never ran
+          EXPECT_EQ(d.frontier_searched, concurrent);
+          if (concurrent) {
+            FrontierWorkspace fw;
+            const FrontierResult direct = find_frontier(p.inflated, Eigen::Vector2f(2.0f, 5.0f), bl, 0.0, s.frontier, fw);
+            EXPECT_EQ(d.frontier.status, direct.status);
+            EXPECT_EQ(d.frontier.goal_xy, direct.goal_xy);
+            EXPECT_EQ(d.frontier.path.size(), direct.path.size());
+            EXPECT_EQ(d.frontier.clusters.size(), direct.clusters.size());
+          }
+        }
+      }
+  }
 }
 
 // A fully known closed room: nothing to learn (cells at the clamps), so R_g <= eps_R and the

@@ -4,8 +4,10 @@
 /// are copied into tree order (cache locality), built in parallel with TBB.
 /// Non-finite points are not indexed and are never returned.
 ///
-/// Thread safety: build() is not thread-safe with concurrent queries. After build(), knn()
-/// and radius() are const and may be called from any number of threads at once.
+/// Thread safety: build() is not thread-safe with concurrent queries. After build(), knn(),
+/// knn_leaf() (with one LeafKnn per thread) and radius() are const and may be called from any
+/// number of threads at once. Memory: ~56 bytes per point (points twice, ids, boxes, and the
+/// build's scratch, kept so that rebuilds of the same size allocate nothing).
 /// Ties (equal distances) are broken by the smaller point index, so results are unique.
 #include <duet/kernels/types.hpp>
 
@@ -16,7 +18,9 @@
 namespace duet {
 
 struct KdTreeSettings {
-  int max_leaf_size = 32;  ///< points per leaf bucket, >= 1
+  /// points per leaf bucket, >= 1. 48: the fastest of 16-96 for the k = 10 normals on the raw
+  /// Kinect clouds (knn_leaf batches; 32 was best for the earlier per-query search).
+  int max_leaf_size = 48;
 };
 
 class KdTree {
@@ -62,6 +66,40 @@ class KdTree {
   int knn_tree_near(const Eigen::Vector3f& q, int k, float max_dist2, std::uint32_t hint_pos,
                     std::uint32_t* tree_pos, float* dist2) const;
 
+  /// Leaf buckets, in tree order: leaf l holds the tree positions [leaf_begin(l), leaf_end(l));
+  /// consecutive leaves are consecutive ranges covering [0, indexed_size()).
+  [[nodiscard]] std::size_t leaf_count() const noexcept { return leaf_node_.size(); }
+  [[nodiscard]] std::uint32_t leaf_begin(std::size_t l) const noexcept { return boxes_[leaf_node_[l]].begin; }
+  [[nodiscard]] std::uint32_t leaf_end(std::size_t l) const noexcept { return boxes_[leaf_node_[l]].end; }
+
+  /// Results and scratch memory of knn_leaf(); one per thread, reused between calls.
+  struct LeafKnn {
+    /// Query i (tree position leaf_begin(l) + i): count[i] neighbours, nearest first, as tree
+    /// positions pos[i*k + r] and squared distances dist2[i*k + r] [m^2], r < count[i].
+    std::vector<std::uint32_t> pos;
+    std::vector<float> dist2;
+    std::vector<int> count;
+    // scratch
+    std::vector<std::uint64_t> keys;
+    std::vector<std::uint32_t> cand;
+    std::vector<std::uint32_t> stack;
+    std::vector<float> cbox;
+    std::vector<std::uint32_t> order;
+    std::vector<std::uint8_t> bucket;
+  };
+
+  /// The k nearest indexed points of each point of leaf l (queries = the leaf's own indexed
+  /// points), each exactly what knn_tree(tree_points()[j], k, ...) returns (same points, same
+  /// order, same ties). A batch over one leaf: the leaf's (or, for fewer than k points, its
+  /// smallest ancestor with k) points bound every query's k-th distance, one traversal collects
+  /// the leaves that can hold a nearer point for any query of the leaf, and each query then
+  /// scans only those whose bounding box is within its own current k-th distance.
+  /// With sorted = false each query's neighbours come in an unspecified (but fixed: the same
+  /// for any thread count) order instead - the same set, cheaper when the order is not needed.
+  /// Returns the number of queries (leaf_end(l) - leaf_begin(l)). Thread-safe (const) with
+  /// one LeafKnn per thread.
+  std::uint32_t knn_leaf(std::size_t l, int k, LeafKnn& ws, bool sorted = true) const;
+
  private:
   struct Node {
     // Leaf: begin/end into pts_. Inner: split dimension and value, children indices.
@@ -70,7 +108,11 @@ class KdTree {
     std::uint32_t a = 0;    // leaf: begin, inner: left child
     std::uint32_t b = 0;    // leaf: end,   inner: right child
   };
-  struct Item;
+  struct Item {
+    Eigen::Vector3f p;
+    std::uint32_t id;
+  };
+  std::vector<Item> items_;  // build scratch (the points being partitioned), kept between builds
   struct LeafStart {
     std::uint32_t node;        // ancestor of the leaf where hinted searches start
     Eigen::Vector3f lo, hi;    // its cell
@@ -79,6 +121,17 @@ class KdTree {
   int knn_impl(const Eigen::Vector3f& q, int k, float max_dist2, std::uint32_t hint, std::uint32_t* tree_pos,
                float* dist2) const;
   void index_leaf_starts(std::uint32_t m);
+  // Tight bounding box of each node's points (the min/max of their coordinates, not the cell its
+  // splits bound) and the node's range of tree positions.
+  struct Box {
+    Eigen::Vector3f lo;
+    std::uint32_t begin;
+    Eigen::Vector3f hi;
+    std::uint32_t end;
+  };
+  std::vector<Box> boxes_;                 // by node
+  std::vector<std::uint32_t> parent_;      // by node (root: kNoHint)
+  std::vector<std::uint32_t> leaf_node_;   // leaves in tree order -> node
   std::vector<LeafStart> leaf_start_;
   std::vector<std::uint32_t> leaf_of_;  // tree position -> leaf (index into leaf_start_)
 

@@ -9,6 +9,9 @@
 /// Points that are not finite, have fewer than 3 neighbours, or whose neighbours are collinear
 /// (second eigenvalue <= 1e-7 of the trace) get NaN normal and curvature.
 ///
+/// Neighbours come from KdTree::knn_leaf (exact k nearest, ties by the smaller index; their
+/// order in the sums is fixed by the tree, so results are identical for any thread count).
+///
 /// Thread safety: reentrant; parallel inside (TBB); results identical for any thread count.
 #include <duet/kernels/kdtree.hpp>
 #include <duet/kernels/types.hpp>

@@ -118,27 +118,30 @@ struct CellWalk {
     // read directly: frexp/ldexp are library calls, and this runs once per ray).
     const int e2 = static_cast<int>((std::bit_cast<std::uint64_t>(4.0 * cap) >> 52) & 0x7ff) - 1022;
     const double scale = std::bit_cast<double>(static_cast<std::uint64_t>(1023 + 61 - e2) << 52);
-    inv_scale = 1.0 / scale;
+    inv_scale = std::bit_cast<double>(static_cast<std::uint64_t>(1023 - 61 + e2) << 52);  // 1 / scale, exact
     auto fixed = [&](double v) {
       const double x = std::min(v, cap) * scale;
       return static_cast<std::int64_t>(x >= 0.0 ? x + 0.5 : x - 0.5);
     };
     // The cell the ray is heading into: on a boundary with a negative direction, the lower cell.
+    // floor / ceil without a libm call (baseline x86-64 has no roundsd): exact for |p| < 1e9.
+    auto floor_i = [](double p) { const int i = static_cast<int>(p); return static_cast<double>(i) > p ? i - 1 : i; };
+    auto ceil_i = [](double p) { const int i = static_cast<int>(p); return static_cast<double>(i) < p ? i + 1 : i; };
     auto axis = [&](double p, float d, int& i, int& st, std::int64_t& m, std::int64_t& del) {
       if (d > 0.0f) {
-        i = static_cast<int>(std::floor(p));
+        i = floor_i(p);
         st = 1;
         const double td = res / d;
         del = fixed(td);
         m = fixed(t0 + (i + 1 - p) * td);
       } else if (d < 0.0f) {
-        i = static_cast<int>(std::ceil(p)) - 1;
+        i = ceil_i(p) - 1;
         st = -1;
         const double td = -res / d;
         del = fixed(td);
         m = fixed(t0 + (p - i) * td);
       } else {
-        i = static_cast<int>(std::floor(p));
+        i = floor_i(p);
         st = 0;
         del = fixed(cap);
         m = fixed(cap);
