@@ -119,14 +119,18 @@ bool Explorer::plan(const Pose2& robot) {
   return true;
 }
 
+float Explorer::dwa_clearance() const {
+  return profile_.exploration.dwa.robot_radius_m + profile_.exploration.dwa.safety_margin_m;
+}
+
+bool Explorer::can_stand_on(int x, int y) const {
+  if (!inflated_.in_bounds(x, y) || !local_.in_bounds(x, y)) return false;
+  return inflated_.traversable[inflated_.index(x, y)] != 0 && local_.clearance_m[local_.index(x, y)] > dwa_clearance();
+}
+
 std::optional<Eigen::Vector2f> Explorer::standoff(const Eigen::Vector2f& target) const {
-  const float needed = profile_.exploration.dwa.robot_radius_m + profile_.exploration.dwa.safety_margin_m;
-  auto fits = [&](int x, int y) {
-    if (!inflated_.in_bounds(x, y) || !local_.in_bounds(x, y)) return false;
-    return inflated_.traversable[inflated_.index(x, y)] != 0 && local_.clearance_m[local_.index(x, y)] > needed;
-  };
-  Eigen::Vector2i c = inflated_.cell_of(target);
-  if (fits(c.x(), c.y())) return target;
+  const Eigen::Vector2i c = inflated_.cell_of(target);
+  if (can_stand_on(c.x(), c.y())) return target;
   // The nearest fitting cell centre by distance to the target (ties: the lower row, then column,
   // so the result is deterministic).
   const float r = settings_.goal_standoff_search_m;
@@ -136,7 +140,7 @@ std::optional<Eigen::Vector2f> Explorer::standoff(const Eigen::Vector2f& target)
   for (int dy = -rc; dy <= rc; ++dy)
     for (int dx = -rc; dx <= rc; ++dx) {
       const int x = c.x() + dx, y = c.y() + dy;
-      if (!fits(x, y)) continue;
+      if (!can_stand_on(x, y)) continue;
       const Eigen::Vector2f p = inflated_.cell_center(inflated_.index(x, y));
       const float d = (p - target).norm();
       if (d <= r && d < best_d) {
@@ -148,8 +152,8 @@ std::optional<Eigen::Vector2f> Explorer::standoff(const Eigen::Vector2f& target)
 }
 
 bool Explorer::recheck_goal() {
-  const Eigen::Vector2f g(goal_->x, goal_->y);
-  if (const auto here = standoff(g); here && (*here - g).norm() == 0.0f) return true;  // still fits
+  const Eigen::Vector2i c = inflated_.cell_of(Eigen::Vector2f(goal_->x, goal_->y));
+  if (can_stand_on(c.x(), c.y())) return true;  // still fits
   const auto p = standoff(goal_target_);
   if (!p) return false;
   goal_->x = p->x();
@@ -262,8 +266,7 @@ std::optional<Twist> Explorer::escape(const Pose2& robot, const Twist& current) 
   Eigen::Vector2i c;
   if (!inflated_.cell_of(Eigen::Vector2f(robot.x, robot.y), c)) return std::nullopt;
   const float here = inflated_.clearance_m[inflated_.index(c.x(), c.y())];
-  const float needed = ds.robot_radius_m + ds.safety_margin_m;
-  if (!(here < needed)) return std::nullopt;  // not hemmed in by seen obstacles: nothing to escape
+  if (!(here < dwa_clearance())) return std::nullopt;  // not hemmed in by seen obstacles: nothing to escape
   // The direction of the largest clearance among the cells 2 cells away.
   Eigen::Vector2f best_dir(0.0f, 0.0f);
   float best = here;

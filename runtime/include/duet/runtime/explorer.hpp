@@ -149,6 +149,11 @@ class Explorer {
   bool plan(const Pose2& robot);
   void abandon(int& counter, double now_s);
   [[nodiscard]] std::optional<Twist> escape(const Pose2& robot, const Twist& current) const;
+  /// The dynamic window's radius + safety margin [m].
+  [[nodiscard]] float dwa_clearance() const;
+  /// Cell (x, y) is traversable globally and clear of unknown cells by dwa_clearance() on the
+  /// dynamic window's grid (false outside either grid).
+  [[nodiscard]] bool can_stand_on(int x, int y) const;
   /// The nearest cell to `target` (within goal_standoff_search_m) the dynamic window can stand
   /// on: traversable globally, and clear of unknown cells by the window's radius on its grid.
   [[nodiscard]] std::optional<Eigen::Vector2f> standoff(const Eigen::Vector2f& target) const;
