@@ -582,6 +582,14 @@ typedef struct duet_frontier_settings {
   int min_cluster_cells;      /* smaller clusters are ignored [cells], >= 1 (default 3) */
   float min_goal_distance_m;  /* nearer goals are skipped [m], >= 0 (default 0.5) */
   float blacklist_radius_m;   /* a blacklisted goal blocks cells within this [m], >= 0 (default 0.5) */
+  /* Frontier cells the robot cannot stand on are reached through traversable "approach" cells
+   * within this distance, found by a breadth-first search over known-free cells from them [m],
+   * >= 0 (default 0 = only traversable frontier cells count). */
+  float approach_radius_m;
+  /* Frontier cells that border only enclosed unknown regions (8-connected unknown cells not
+   * touching the grid border) smaller than this are ignored: the inside of an obstacle, the
+   * shadow of a pillar [m^2], >= 0 (default 0 = every region counts). */
+  float min_unknown_region_m2;
 } duet_frontier_settings;
 
 DUET_API void duet_frontier_settings_init(duet_frontier_settings* settings);
@@ -744,6 +752,8 @@ typedef struct duet_frontier_result {
   size_t cluster_count;    /* full number of kept clusters (ordered by their smallest cell index) */
   size_t frontier_cells;   /* frontier cells in kept clusters */
   size_t reached_cells;    /* cells settled by the search (diagnostics) */
+  float target_x, target_y; /* the frontier cell the goal is for [m]: the goal itself, or for a goal
+                               on an approach cell (approach_radius_m) its source frontier cell */
 } duet_frontier_result;
 
 /* One decision of Fig. 6. `simulation` and `frontier` report the two stages (their arrays are

@@ -57,6 +57,8 @@ duet_frontier_settings to_c(const FrontierSettings& f) {
   c.min_cluster_cells = f.min_cluster_cells;
   c.min_goal_distance_m = f.min_goal_distance_m;
   c.blacklist_radius_m = f.blacklist_radius_m;
+  c.approach_radius_m = f.approach_radius_m;
+  c.min_unknown_region_m2 = f.min_unknown_region_m2;
   return c;
 }
 
@@ -65,6 +67,8 @@ FrontierSettings from_c(const duet_frontier_settings& c) {
   f.min_cluster_cells = c.min_cluster_cells;
   f.min_goal_distance_m = c.min_goal_distance_m;
   f.blacklist_radius_m = c.blacklist_radius_m;
+  f.approach_radius_m = c.approach_radius_m;
+  f.min_unknown_region_m2 = c.min_unknown_region_m2;
   return f;
 }
 
@@ -282,6 +286,8 @@ duet_frontier_result to_c(const FrontierResult& r) {
   }
   c.goal_x = r.goal_xy.x();
   c.goal_y = r.goal_xy.y();
+  c.target_x = r.target_xy.x();
+  c.target_y = r.target_xy.y();
   c.path_length_m = r.path_length_m;
   c.path_count = r.path.size();
   c.cluster_count = r.clusters.size();

@@ -87,7 +87,10 @@ ExplorationDecision decide_goal(const ObservationModel& model, const InflatedGri
       d.goal.x = d.frontier.goal_xy.x();
       d.goal.y = d.frontier.goal_xy.y();
       const auto& path = d.frontier.path;
-      if (path.size() >= 2) {
+      const Eigen::Vector2f look = d.frontier.target_xy - d.frontier.goal_xy;
+      if (look.squaredNorm() > 0.0f) {  // an approach cell: face the frontier cell it is for
+        d.goal.theta = std::atan2(look.y(), look.x());
+      } else if (path.size() >= 2) {
         const Eigen::Vector2f dir = path.back() - path[path.size() - 2];
         d.goal.theta = std::atan2(dir.y(), dir.x());
       } else {

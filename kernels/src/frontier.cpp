@@ -37,6 +37,12 @@ void validate(const FrontierSettings& s) {
   if (!std::isfinite(s.blacklist_radius_m) || !(s.blacklist_radius_m >= 0.0f))
     fail(ErrorCode::kInvalidArgument,
          "FrontierSettings.blacklist_radius_m must be finite and >= 0 [m], got " + std::to_string(s.blacklist_radius_m));
+  if (!std::isfinite(s.min_unknown_region_m2) || !(s.min_unknown_region_m2 >= 0.0f))
+    fail(ErrorCode::kInvalidArgument,
+         "FrontierSettings.min_unknown_region_m2 must be finite and >= 0 [m^2], got " + std::to_string(s.min_unknown_region_m2));
+  if (!std::isfinite(s.approach_radius_m) || !(s.approach_radius_m >= 0.0f))
+    fail(ErrorCode::kInvalidArgument,
+         "FrontierSettings.approach_radius_m must be finite and >= 0 [m], got " + std::to_string(s.approach_radius_m));
 }
 
 const char* to_string(FrontierStatus s) {
@@ -459,7 +465,7 @@ void init_rows(const InflatedGrid& g, const std::uint8_t* mask, std::uint8_t* fl
   if (!with_flags) return;
   std::uint8_t* f = flags + row;
   const std::uint8_t* m = mask + row;
-  for (std::size_t x = 0; x < w; ++x) f[x] = static_cast<std::uint8_t>(t[x] | (m[x] << 1));
+  for (std::size_t x = 0; x < w; ++x) f[x] = static_cast<std::uint8_t>(t[x] | ((m[x] != 0) << 1));
   if (y == 0 || y + 1 == static_cast<std::size_t>(g.height)) {
     for (std::size_t x = 0; x < w; ++x) f[x] |= 4;
   } else {
@@ -595,6 +601,124 @@ void trace_back(const InflatedGrid& g, const C* cost, std::size_t start, std::si
   }
 }
 
+/// Drops (mask = 0) the frontier cells whose unknown 8-neighbours all lie in enclosed unknown
+/// regions of fewer than min_cells cells (see min_unknown_region_m2 in frontier.hpp). Each region
+/// is measured once, by a breadth-first search over kUnknown cells that stops as soon as it has
+/// min_cells cells, touches the grid border or meets a cell already proved large.
+void drop_enclosed_pockets(const InflatedGrid& g, std::size_t min_cells, FrontierWorkspace& ws) {
+  const std::size_t n = g.cell_count();
+  if (ws.region.size() != n) ws.region.assign(n, 0);
+  ws.region_cells.clear();
+  const int w = g.width, h = g.height;
+  const auto uw = static_cast<std::uint32_t>(w);
+  auto on_border = [&](std::uint32_t c) {
+    const int x = static_cast<int>(c % uw), y = static_cast<int>(c / uw);
+    return x == 0 || y == 0 || x == w - 1 || y == h - 1;
+  };
+  // The verdict (1 small, 2 large) of the region of unknown cell u.
+  auto measure = [&](std::uint32_t u) -> std::uint8_t {
+    if (ws.region[u] == 1 || ws.region[u] == 2) return ws.region[u];
+    const std::size_t first = ws.region_cells.size();
+    ws.region[u] = 3;
+    ws.region_cells.push_back(u);
+    bool large = false;
+    for (std::size_t head = first; head < ws.region_cells.size() && !large; ++head) {
+      const std::uint32_t c = ws.region_cells[head];
+      if (on_border(c) || ws.region_cells.size() - first >= min_cells) {
+        large = true;
+        break;
+      }
+      const int x = static_cast<int>(c % uw), y = static_cast<int>(c / uw);
+      for (int d = 0; d < 8; ++d) {
+        const int nx = x + kDx[d], ny = y + kDy[d];
+        if (!g.in_bounds(nx, ny)) continue;
+        const std::size_t ni = g.index(nx, ny);
+        if (g.state[ni] != CellState::kUnknown) continue;
+        if (ws.region[ni] == 2) {
+          large = true;
+          break;
+        }
+        if (ws.region[ni] != 0) continue;  // in this search already (a small region is never adjacent)
+        ws.region[ni] = 3;
+        ws.region_cells.push_back(static_cast<std::uint32_t>(ni));
+      }
+    }
+    const std::uint8_t v = large ? 2 : 1;
+    for (std::size_t k = first; k < ws.region_cells.size(); ++k) ws.region[ws.region_cells[k]] = v;
+    return v;
+  };
+  for (const std::uint32_t f : ws.frontier) {
+    if (!ws.mask[f]) continue;
+    const int x = static_cast<int>(f % uw), y = static_cast<int>(f / uw);
+    bool keep = false;
+    for (int d = 0; d < 8 && !keep; ++d) {
+      const int nx = x + kDx[d], ny = y + kDy[d];
+      if (!g.in_bounds(nx, ny)) continue;
+      const std::size_t ni = g.index(nx, ny);
+      if (g.state[ni] == CellState::kUnknown) keep = measure(static_cast<std::uint32_t>(ni)) == 2;
+    }
+    if (!keep) ws.mask[f] = 0;
+  }
+  for (const std::uint32_t c : ws.region_cells) ws.region[c] = 0;
+  ws.region_cells.clear();
+}
+
+/// Approach cells (see approach_radius_m in frontier.hpp): a FIFO breadth-first search from the
+/// connected frontier cells of the kept clusters that have no traversable cell (has_traversable[k]
+/// = 0; ascending index order) over kFree cells,
+/// each cell inheriting the source of the wave that reached it first and spreading only within
+/// radius of that source. Reached traversable non-frontier cells get mask 3 and their source's
+/// cluster label. The visited cells are listed in ws.approach_queue (their approach_src is reset
+/// by reset_approach()).
+void mark_approach_cells(const InflatedGrid& g, float radius_m, const std::vector<std::uint8_t>& has_traversable,
+                         FrontierWorkspace& ws) {
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  const std::size_t n = g.cell_count();
+  if (ws.approach_src.size() != n) ws.approach_src.assign(n, kNone);
+  ws.approach_queue.clear();
+  const int w = g.width, h = g.height;
+  const auto uw = static_cast<std::uint32_t>(w);
+  const float r_cells = radius_m / g.resolution_m;
+  const float r2 = r_cells * r_cells;
+  for (const std::uint32_t f : ws.frontier) {
+    if (ws.mask[f] != 1 || has_traversable[static_cast<std::size_t>(ws.label[f])]) continue;
+    const int x = static_cast<int>(f % uw), y = static_cast<int>(f / uw);
+    if (x == 0 || y == 0 || x == w - 1 || y == h - 1) continue;  // not connected (§3.2)
+    if (ws.approach_src[f] != kNone) continue;                    // claimed by an earlier wave
+    ws.approach_src[f] = f;
+    ws.approach_queue.push_back(f);
+  }
+  for (std::size_t head = 0; head < ws.approach_queue.size(); ++head) {
+    const std::uint32_t c = ws.approach_queue[head];
+    const std::uint32_t src = ws.approach_src[c];
+    const int x = static_cast<int>(c % uw), y = static_cast<int>(c / uw);
+    const int sx = static_cast<int>(src % uw), sy = static_cast<int>(src / uw);
+    for (int d = 0; d < 8; ++d) {
+      const int nx = x + kDx[d], ny = y + kDy[d];
+      if (!g.in_bounds(nx, ny)) continue;
+      const std::size_t ni = g.index(nx, ny);
+      if (ws.approach_src[ni] != kNone || g.state[ni] != CellState::kFree) continue;
+      const auto ddx = static_cast<float>(nx - sx), ddy = static_cast<float>(ny - sy);
+      if (ddx * ddx + ddy * ddy > r2) continue;
+      ws.approach_src[ni] = src;
+      ws.approach_queue.push_back(static_cast<std::uint32_t>(ni));
+      if (g.traversable[ni] && ws.mask[ni] == 0) {
+        ws.mask[ni] = 3;
+        ws.label[ni] = ws.label[src];
+      }
+    }
+  }
+}
+
+/// Undoes mark_approach_cells (approach_src back to "not visited", mask 3 back to 0).
+void reset_approach(FrontierWorkspace& ws) {
+  for (const std::uint32_t c : ws.approach_queue) {
+    ws.approach_src[c] = std::numeric_limits<std::uint32_t>::max();
+    if (ws.mask[c] == 3) ws.mask[c] = 0;
+  }
+  ws.approach_queue.clear();
+}
+
 }  // namespace
 
 FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot_xy, const GoalBlacklist& bl,
@@ -611,6 +735,11 @@ FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot
   ws.label.resize(n);
   frontier_mask(g.state, w, h, ws.mask);
   compact(ws.mask, w, h, ws);
+  if (s.min_unknown_region_m2 > 0.0f) {
+    const double cells = std::ceil(static_cast<double>(s.min_unknown_region_m2) /
+                                   (static_cast<double>(g.resolution_m) * static_cast<double>(g.resolution_m)));
+    drop_enclosed_pockets(g, cells >= 1e15 ? std::size_t{1} << 50 : static_cast<std::size_t>(cells), ws);
+  }
 
   // 2. Clusters: 8-connected flood fill in ascending order of the first cell (serial). mask: 1 =
   // unlabelled frontier, 2 = labelled.
@@ -660,7 +789,9 @@ FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot
   }
   // Relabel to kept ids, drop small clusters from the mask, Euclidean-nearest cell per cluster.
   std::vector<float> best_e(res.clusters.size(), std::numeric_limits<float>::infinity());
+  std::vector<std::uint8_t> has_traversable(res.clusters.size(), 0);
   for (const std::uint32_t c : ws.frontier) {
+    if (ws.mask[c] == 0) continue;  // dropped as the border of an enclosed pocket
     const std::int32_t k = ws.cluster_raw[static_cast<std::size_t>(ws.label[c])];
     if (k < 0) {
       ws.mask[c] = 0;
@@ -668,6 +799,7 @@ FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot
     }
     ws.mask[c] = 1;
     ws.label[c] = k;
+    has_traversable[static_cast<std::size_t>(k)] |= g.traversable[c];
     ++res.frontier_cells;
     const Eigen::Vector2f p = g.cell_center(static_cast<std::size_t>(c));
     const float e = (p - robot_xy).squaredNorm();
@@ -680,6 +812,13 @@ FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot
     res.status = FrontierStatus::kNoFrontier;
     return res;
   }
+  // 2b. Approach cells of the frontier cells the robot cannot stand on (undone on every return:
+  // approach_src must be all "not visited" for the next call).
+  struct ApproachReset {
+    FrontierWorkspace& ws;
+    ~ApproachReset() { reset_approach(ws); }
+  } approach_reset{ws};
+  if (s.approach_radius_m > 0.0f) mark_approach_cells(g, s.approach_radius_m, has_traversable, ws);
 
   // 3. Robot cell (plan_path's start rule).
   Eigen::Vector2i rc;
@@ -723,7 +862,11 @@ FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot
       if (f & 4) return;  // not connected (§3.2): on the grid border
       any_connected_reached = true;
       if (d < min_cost) return;
-      if (bl.blocks(g.cell_center(static_cast<std::size_t>(c)), s.blacklist_radius_m, now_s)) {
+      // An approach cell is blocked by the blacklist near itself or near the frontier cell it is for.
+      const bool blocked = bl.blocks(g.cell_center(static_cast<std::size_t>(c)), s.blacklist_radius_m, now_s) ||
+                           (ws.mask[c] == 3 && bl.blocks(g.cell_center(static_cast<std::size_t>(ws.approach_src[c])),
+                                                         s.blacklist_radius_m, now_s));
+      if (blocked) {
         ws.cand[k] = std::max<std::uint8_t>(ws.cand[k], 1);
       } else {
         ws.cand[k] = 2;
@@ -761,6 +904,7 @@ FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot
   res.status = FrontierStatus::kFound;
   const auto gl = static_cast<std::size_t>(goal);
   res.goal_xy = g.cell_center(gl);
+  res.target_xy = ws.mask[gl] == 3 ? g.cell_center(static_cast<std::size_t>(ws.approach_src[gl])) : res.goal_xy;
   std::vector<std::size_t> cells;
   std::size_t n_orth = 0, n_diag = 0;
   if (wide) trace_back(g, ws.cost64.data(), static_cast<std::size_t>(start), gl, cells, n_orth, n_diag);

@@ -12,6 +12,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <atomic>
 #include <cmath>
 #include <cstring>
@@ -440,34 +441,88 @@ struct ObservationModel::Impl {
   }
 
   /// Sums the entropy from the walk's current cell (entered at t0) to the hit or the walk's end.
+  /// While the walk is inside the grid it runs without bounds checks: the time it leaves the grid
+  /// is known up front (the crossing that takes ix or iy outside, exact in the walk's integers),
+  /// so one end test covers both. The grid is convex: a walk that leaves it never returns, and the
+  /// cells outside (unknown, 1 bit, never a hit) are counted by the checked loop after it. The
+  /// entry time of the hit cell is not carried along either: it is the later of the last x and y
+  /// crossings, max(mx - dx, my - dy), and at most the first cell's for the first cell (-> t0).
+  /// Fewer live values, so the loop keeps its sum in a register (it was spilled before).
   [[nodiscard]] RayObservation sum_walk(const detail::CellWalk& w, float t0, float t1) const noexcept {
     RayObservation r{0.0f, t1, false, 0};
     std::uint64_t sum = 0;
     std::int32_t n = 0;
     const std::uint32_t* const cells = packed.data();
-    const std::uint64_t width = static_cast<unsigned>(view.width), height = static_cast<unsigned>(view.height);
+    const std::int64_t width = view.width, height = view.height;
     const std::int64_t sx = w.sx, sy = w.sy, dx = w.dx, dy = w.dy, end = w.end;
     std::int64_t ix = w.ix, iy = w.iy, mx = w.mx, my = w.my;
-    std::int64_t entered = -1;  // entry time of the current cell (fixed point); -1: t0
-    for (;;) {
-      const bool inside = static_cast<std::uint64_t>(ix) < width && static_cast<std::uint64_t>(iy) < height;
+    const std::int64_t first_entry = std::max(mx - dx, my - dy);  // <= the fixed-point t0
+    auto hit_at = [&](std::int64_t x_cross, std::int64_t y_cross) {
+      const std::int64_t entry = std::max(x_cross - dx, y_cross - dy);
+      r.hit = true;
+      r.range_m = entry <= first_entry ? t0 : w.time(entry);
+    };
+    if (static_cast<std::uint64_t>(ix) < static_cast<std::uint64_t>(width) &&
+        static_cast<std::uint64_t>(iy) < static_cast<std::uint64_t>(height)) {
+      // Time of the crossing that leaves the grid along each axis (k-th crossing at m + (k-1) d),
+      // capped at end (an overflowing product is beyond end too).
+      auto leave = [end](std::int64_t m, std::int64_t d, std::int64_t k) -> std::int64_t {
+        std::int64_t prod = 0;
+        if (m >= end || __builtin_mul_overflow(k - 1, d, &prod) || prod >= end - m) return end;
+        return m + prod;
+      };
+      std::int64_t t_out = end;
+      if (sx != 0) t_out = std::min(t_out, leave(mx, dx, sx > 0 ? width - ix : ix + 1));
+      if (sy != 0) t_out = std::min(t_out, leave(my, dy, sy > 0 ? height - iy : iy + 1));
+      const std::size_t bx = blocks_x;
+      for (;;) {  // inside the grid: no bounds checks
+        const std::uint32_t wd = cells[(((static_cast<std::size_t>(iy) >> 2) * bx + (static_cast<std::size_t>(ix) >> 2)) << 4) |
+                                       ((static_cast<std::size_t>(iy) & 3u) << 2) | (static_cast<std::size_t>(ix) & 3u)];
+        sum += word_entropy(wd);
+        ++n;
+        if (wd & kOccupiedBit) {
+          hit_at(mx, my);
+          r.entropy_bits = bits_of(sum);
+          r.cells = n;
+          return r;
+        }
+        const std::int64_t tn = mx < my ? mx : my;  // exit time of this cell
+        if (tn >= t_out) break;
+        const bool bx_step = mx <= my, by_step = my <= mx;  // both on a tie
+        ix += bx_step ? sx : 0;
+        iy += by_step ? sy : 0;
+        mx += bx_step ? dx : 0;
+        my += by_step ? dy : 0;
+      }
+      if (t_out >= end) {  // the walk ended inside the grid
+        r.entropy_bits = bits_of(sum);
+        r.cells = n;
+        return r;
+      }
+      const bool bx_step = mx <= my, by_step = my <= mx;  // step out of the grid
+      ix += bx_step ? sx : 0;
+      iy += by_step ? sy : 0;
+      mx += bx_step ? dx : 0;
+      my += by_step ? dy : 0;
+    }
+    for (;;) {  // outside the grid (a walk that starts outside may enter it): checked
+      const bool inside = static_cast<std::uint64_t>(ix) < static_cast<std::uint64_t>(width) &&
+                          static_cast<std::uint64_t>(iy) < static_cast<std::uint64_t>(height);
       const std::uint32_t wd =
           inside ? cells[packed_index(static_cast<unsigned>(ix), static_cast<unsigned>(iy))] : kUnknownWord;
       sum += word_entropy(wd);
       ++n;
       if (wd & kOccupiedBit) {
-        r.hit = true;
-        r.range_m = entered < 0 ? t0 : w.time(entered);
+        hit_at(mx, my);
         break;
       }
       const std::int64_t tn = mx < my ? mx : my;  // exit time of this cell
       if (tn >= end) break;
-      entered = tn;
-      const bool bx = mx <= my, by = my <= mx;
-      ix += bx ? sx : 0;
-      iy += by ? sy : 0;
-      mx += bx ? dx : 0;
-      my += by ? dy : 0;
+      const bool bx_step = mx <= my, by_step = my <= mx;
+      ix += bx_step ? sx : 0;
+      iy += by_step ? sy : 0;
+      mx += bx_step ? dx : 0;
+      my += by_step ? dy : 0;
     }
     r.entropy_bits = bits_of(sum);
     r.cells = n;
@@ -695,11 +750,25 @@ void ObservationModel::observe(std::span<const Pose2> poses, std::span<const Sen
     RayObservation* o = out.data() + p * total + first[si];
     const float c = std::cos(pose.theta), sn = std::sin(pose.theta);
     if (dda) {
-      const bool prefetch = m.packed.size() * sizeof(std::uint32_t) > Impl::kPrefetchBytes;
+      static const int mode = std::getenv("DUET_PF") ? std::atoi(std::getenv("DUET_PF")) : 0;
+      static const std::size_t thr = std::getenv("DUET_PFT") ? std::strtoull(std::getenv("DUET_PFT"), nullptr, 10) : Impl::kPrefetchBytes;
+      const bool prefetch = m.packed.size() * sizeof(std::uint32_t) > thr;
+      if (prefetch && mode == 1) {
+        for (int r = 0; r < s.rays; ++r) {
+          Eigen::Vector2f org, dir;
+          fan_ray(pose, s, c, sn, r, org, dir);
+          m.prefetch_ray(org, dir, s.max_range_m);
+        }
+      }
       for (int r = 0; r < s.rays; ++r) {
         Eigen::Vector2f org, dir;
         fan_ray(pose, s, c, sn, r, org, dir);
-        if (prefetch) m.prefetch_ray(org, dir, s.max_range_m);
+        if (prefetch && mode == 0) m.prefetch_ray(org, dir, s.max_range_m);
+        if (prefetch && mode == 2 && r + 2 < s.rays) {
+          Eigen::Vector2f o2, d2;
+          fan_ray(pose, s, c, sn, r + 2, o2, d2);
+          m.prefetch_ray(o2, d2, s.max_range_m);
+        }
         o[r] = m.observe_dda_from_sensor(org, dir, s.min_range_m, s.max_range_m);
       }
       return;

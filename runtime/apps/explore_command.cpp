@@ -97,7 +97,8 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                 {"replans", e.replans},
                 {"dwa_local_fallbacks", e.local_fallbacks},
                 {"escapes", e.escapes},
-                {"goals_moved", e.goals_moved}};
+                {"goals_moved", e.goals_moved},
+                {"relaxed_goals", e.relaxed_goals}};
   j["frames_rendered"] = s.frames_rendered;
   j["sets_integrated"] = s.sets_integrated;
   j["sets_not_integrated"] = s.sets_not_integrated;
@@ -162,6 +163,8 @@ nlohmann::json run_log(const sim::SimExplore& run) {
                               {"planned", d.planned},
                               {"frontier_cells", d.frontier_cells},
                               {"reachable_frontier_clusters", d.reachable_clusters},
+                              {"frontier_reached_cells", d.reached_cells},
+                              {"relaxed", d.relaxed},
                               {"nearest_frontier", {d.nearest_frontier.x(), d.nearest_frontier.y()}},
                               {"wall_time_ms", 1e3 * d.wall_time_s}});
   j["collisions"] = nlohmann::json::array();

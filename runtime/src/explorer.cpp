@@ -67,6 +67,8 @@ void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double 
     model_geometry_valid_ = true;
   }
   inflate(view, profile_.exploration.inflation, inflated_);
+  map_ = grid;
+  if (relaxed_active_) build_relaxed();
   // The dynamic window's grid: unknown is an obstacle, except where the robot's body has been.
   local_grid_ = grid;
   const float free_l = std::min(profile_.exploration.cells.free_logodds, profile_.mapping.grid_update.min_logodds);
@@ -110,8 +112,40 @@ void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double 
   }
 }
 
+void Explorer::build_relaxed() {
+  InflationSettings relaxed = profile_.exploration.inflation;
+  relaxed.uncertain_is_obstacle = false;
+  inflate(GridView(map_), relaxed, relaxed_);
+}
+
+bool Explorer::try_relaxed(const Pose2& robot, double now_s) {
+  if (!profile_.exploration.inflation.uncertain_is_obstacle || map_.width() == 0) return false;
+  if (decision_.status != ExplorationStatus::kAllUnreachable && decision_.status != ExplorationStatus::kRobotBlocked &&
+      decision_.status != ExplorationStatus::kAllBlacklisted)
+    return false;
+  build_relaxed();
+  const ExplorationSettings& s = profile_.exploration.strategy;
+  FrontierResult f = find_frontier(relaxed_, Eigen::Vector2f(robot.x, robot.y), blacklist_, now_s, s.frontier, ws_.frontier);
+  if (f.status != FrontierStatus::kFound) return false;
+  decision_.status = ExplorationStatus::kFrontierGoal;
+  decision_.goal = Pose2{f.goal_xy.x(), f.goal_xy.y(), 0.0f};
+  const Eigen::Vector2f look = f.target_xy - f.goal_xy;  // as decide_goal: face the target or the last step
+  if (look.squaredNorm() > 0.0f) decision_.goal.theta = std::atan2(look.y(), look.x());
+  else if (f.path.size() >= 2) {
+    const Eigen::Vector2f d = f.path.back() - f.path[f.path.size() - 2];
+    decision_.goal.theta = std::atan2(d.y(), d.x());
+  } else {
+    decision_.goal.theta = std::atan2(f.goal_xy.y() - robot.y, f.goal_xy.x() - robot.x);
+  }
+  decision_.frontier = std::move(f);
+  decision_.frontier_searched = true;
+  relaxed_active_ = true;
+  ++stats_.relaxed_goals;
+  return true;
+}
+
 bool Explorer::plan(const Pose2& robot) {
-  const PathResult r = plan_path(inflated_, Eigen::Vector2f(robot.x, robot.y), Eigen::Vector2f(goal_->x, goal_->y),
+  const PathResult r = plan_path(planning_grid(), Eigen::Vector2f(robot.x, robot.y), Eigen::Vector2f(goal_->x, goal_->y),
                                  profile_.exploration.path, path_ws_);
   if (r.status != PathStatus::kFound) return false;
   path_ = r.waypoints;
@@ -124,8 +158,9 @@ float Explorer::dwa_clearance() const {
 }
 
 bool Explorer::can_stand_on(int x, int y) const {
-  if (!inflated_.in_bounds(x, y) || !local_.in_bounds(x, y)) return false;
-  return inflated_.traversable[inflated_.index(x, y)] != 0 && local_.clearance_m[local_.index(x, y)] > dwa_clearance();
+  const InflatedGrid& g = planning_grid();
+  if (!g.in_bounds(x, y) || !local_.in_bounds(x, y)) return false;
+  return g.traversable[g.index(x, y)] != 0 && local_.clearance_m[local_.index(x, y)] > dwa_clearance();
 }
 
 std::optional<Eigen::Vector2f> Explorer::standoff(const Eigen::Vector2f& target) const {
@@ -166,6 +201,7 @@ void Explorer::abandon(int& counter, double now_s) {
   ++counter;
   if (goal_) blacklist_.add(goal_target_, now_s, settings_.blacklist_ttl_s);
   goal_.reset();
+  relaxed_active_ = false;
   path_.clear();
   dwa_state_.reset();
   stuck_since_s_ = -1.0;
@@ -202,6 +238,7 @@ void Explorer::decide(const Pose2& robot, double now_s) {
     rec.goal = decision_.goal;
     rec.wall_time_s = dt;
     rec.frontier_cells = decision_.frontier.frontier_cells;
+    rec.reached_cells = decision_.frontier.reached_cells;
     float best = std::numeric_limits<float>::infinity();
     for (const auto& c : decision_.frontier.clusters)
       if (c.reachable) {
@@ -229,6 +266,11 @@ void Explorer::decide(const Pose2& robot, double now_s) {
         blacklist_ = keep;
         continue;
       }
+    }
+    relaxed_active_ = false;
+    if (!decision_.has_goal() && try_relaxed(robot, now_s)) {
+      log_.back().status = decision_.status;
+      log_.back().relaxed = true;
     }
     if (!decision_.has_goal()) {
       if (++no_goal_decisions_ > settings_.final_retries) {
@@ -319,9 +361,14 @@ Twist Explorer::control(const Pose2& robot, const Twist& current, double now_s) 
       ++stats_.goals_reached;
       // A frontier that is still a frontier after the robot stood at it and looked at it cannot
       // be observed from there (the inside of an obstacle behind a gap in its outline): never again.
-      if (decision_.status == ExplorationStatus::kFrontierGoal)
+      // For a goal on an approach cell the frontier cell it was for is the one looked at.
+      if (decision_.status == ExplorationStatus::kFrontierGoal) {
         blacklist_.add(goal_target_, now_s, std::numeric_limits<double>::infinity());
+        if (decision_.frontier.target_xy != goal_target_)
+          blacklist_.add(decision_.frontier.target_xy, now_s, std::numeric_limits<double>::infinity());
+      }
       goal_.reset();
+      relaxed_active_ = false;
       path_.clear();
       dwa_state_.reset();
       return Twist{};

@@ -419,10 +419,12 @@ ExplorationProfile read_exploration(Reader& r, const YAML::Node& n, const Chassi
   }
   if (const YAML::Node b = m.get("frontier")) {
     FrontierSettings& f = ex.strategy.frontier;
-    MapReader q(r, b, m.path_of("frontier"), {"min_cluster_cells", "min_goal_distance_m", "blacklist_radius_m"});
+    MapReader q(r, b, m.path_of("frontier"), {"min_cluster_cells", "min_goal_distance_m", "blacklist_radius_m", "approach_radius_m", "min_unknown_region_m2"});
     q.opt_int("min_cluster_cells", f.min_cluster_cells, kAnyInt);
     q.opt_real("min_goal_distance_m", f.min_goal_distance_m);
     q.opt_real("blacklist_radius_m", f.blacklist_radius_m);
+    q.opt_real("approach_radius_m", f.approach_radius_m);
+    q.opt_real("min_unknown_region_m2", f.min_unknown_region_m2);
   }
   if (const YAML::Node b = m.get("simulation")) {
     PartialSimSettings& ps = ex.strategy.simulation;

@@ -301,6 +301,8 @@ TEST(CapiPlannerSettings, InitFunctionsMirrorTheCppDefaults) {
   EXPECT_EQ(fs.min_cluster_cells, cfs.min_cluster_cells);
   EXPECT_EQ(fs.min_goal_distance_m, cfs.min_goal_distance_m);
   EXPECT_EQ(fs.blacklist_radius_m, cfs.blacklist_radius_m);
+  EXPECT_EQ(fs.approach_radius_m, cfs.approach_radius_m);
+  EXPECT_EQ(fs.min_unknown_region_m2, cfs.min_unknown_region_m2);
 
   duet_partial_sim_settings sim;
   duet_partial_sim_settings_init(&sim);
@@ -338,6 +340,7 @@ TEST(CapiPlannerSettings, InitFunctionsMirrorTheCppDefaults) {
   EXPECT_EQ(es.simulation.seed, ces.simulation.seed);
   EXPECT_EQ(es.frontier.min_cluster_cells, ces.frontier.min_cluster_cells);
   EXPECT_EQ(es.frontier.blacklist_radius_m, ces.frontier.blacklist_radius_m);
+  EXPECT_EQ(es.frontier.approach_radius_m, ces.frontier.approach_radius_m);
 
   duet_dwa_settings ds;
   duet_dwa_settings_init(&ds);
@@ -576,6 +579,8 @@ TEST_F(PlannerTest, FrontierSearchAndBlacklistEqualTheKernel) {
       EXPECT_EQ(static_cast<int>(out.status), static_cast<int>(r.status));
       EXPECT_TRUE(same_float(out.goal_x, r.goal_xy.x()));
       EXPECT_TRUE(same_float(out.goal_y, r.goal_xy.y()));
+      EXPECT_TRUE(same_float(out.target_x, r.target_xy.x()));
+      EXPECT_TRUE(same_float(out.target_y, r.target_xy.y()));
       EXPECT_TRUE(same_float(out.path_length_m, r.path_length_m));
       EXPECT_EQ(out.frontier_cells, r.frontier_cells);
       EXPECT_EQ(out.reached_cells, r.reached_cells);
@@ -1498,6 +1503,8 @@ TEST_F(PlannerTest, BadSettingsFieldsAreNamed) {
   frontier_case("min_cluster_cells", [](auto& s) { s.min_cluster_cells = 0; });
   frontier_case("min_goal_distance_m", [](auto& s) { s.min_goal_distance_m = -1.0f; });
   frontier_case("blacklist_radius_m", [](auto& s) { s.blacklist_radius_m = kNaN; });
+  frontier_case("approach_radius_m", [](auto& s) { s.approach_radius_m = -0.5f; });
+  frontier_case("min_unknown_region_m2", [](auto& s) { s.min_unknown_region_m2 = kNaN; });
   auto exploration_case = [&](const char* field, std::function<void(duet_exploration_settings&)> change) {
     cases.push_back({field,
                      [this, robot, change] {

@@ -167,10 +167,95 @@ bool connected(const InflatedGrid& g, std::size_t c) {
   return x > 0 && y > 0 && x < g.width - 1 && y < g.height - 1;
 }
 
+// Approach cells (FrontierSettings::approach_radius_m), written plainly from the header's rule:
+// src[c] = the frontier cell whose wave claimed c (or -1); approach[c] = traversable, not a kept
+// frontier cell, claimed.
+void reference_approach(const InflatedGrid& g, const std::vector<int>& label,
+                        std::size_t clusters, float radius_m, std::vector<long>& src, std::vector<char>& approach) {
+  src.assign(g.cell_count(), -1);
+  approach.assign(g.cell_count(), 0);
+  if (!(radius_m > 0.0f)) return;
+  std::vector<char> has_trav(clusters, 0);
+  for (std::size_t c = 0; c < g.cell_count(); ++c)
+    if (label[c] >= 0 && g.traversable[c]) has_trav[std::size_t(label[c])] = 1;
+  std::queue<std::size_t> q;
+  for (std::size_t c = 0; c < g.cell_count(); ++c)
+    if (label[c] >= 0 && !has_trav[std::size_t(label[c])] && connected(g, c)) {
+      src[c] = long(c);
+      q.push(c);
+    }
+  const double r = radius_m / g.resolution_m;
+  while (!q.empty()) {
+    const std::size_t c = q.front();
+    q.pop();
+    const auto s = std::size_t(src[c]);
+    const int x = int(c % std::size_t(g.width)), y = int(c / std::size_t(g.width));
+    const int sx = int(s % std::size_t(g.width)), sy = int(s / std::size_t(g.width));
+    for (int d = 0; d < 8; ++d) {  // the kernel's neighbour order: E, W, N, S, NE, NW, SE, SW
+      static constexpr int kx[8] = {1, -1, 0, 0, 1, -1, 1, -1}, ky[8] = {0, 0, 1, -1, 1, 1, -1, -1};
+      const int nx = x + kx[d], ny = y + ky[d];
+      if (!g.in_bounds(nx, ny)) continue;
+      const std::size_t ni = g.index(nx, ny);
+      if (src[ni] >= 0 || g.state[ni] != CellState::kFree) continue;
+      if (std::hypot(double(nx - sx), double(ny - sy)) > r + 1e-9) continue;
+      src[ni] = long(s);
+      q.push(ni);
+      if (g.traversable[ni] && label[ni] < 0) approach[ni] = 1;
+    }
+  }
+}
+
 // Full comparison of find_frontier with the references; robot_xy must be in a traversable cell.
+// min_unknown_region_m2: clears the frontier cells whose unknown 8-neighbours all lie in unknown
+// components (8-connected, labelled in full) of fewer than min_cells cells not touching the border.
+void reference_drop_pockets(const InflatedGrid& g, double min_m2, std::vector<std::uint8_t>& m) {
+  if (!(min_m2 > 0.0)) return;
+  const double min_cells = std::ceil(min_m2 / (double(g.resolution_m) * double(g.resolution_m)));
+  std::vector<int> comp(g.cell_count(), -1);
+  std::vector<char> large;
+  for (std::size_t i = 0; i < g.cell_count(); ++i) {
+    if (g.state[i] != CellState::kUnknown || comp[i] >= 0) continue;
+    const int id = int(large.size());
+    std::queue<std::size_t> q;
+    q.push(i);
+    comp[i] = id;
+    std::size_t size = 0;
+    bool border = false;
+    while (!q.empty()) {
+      const std::size_t c = q.front();
+      q.pop();
+      ++size;
+      const int x = int(c % std::size_t(g.width)), y = int(c / std::size_t(g.width));
+      border = border || x == 0 || y == 0 || x == g.width - 1 || y == g.height - 1;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int nx = x + dx, ny = y + dy;
+          if (!g.in_bounds(nx, ny)) continue;
+          const std::size_t ni = g.index(nx, ny);
+          if (g.state[ni] == CellState::kUnknown && comp[ni] < 0) {
+            comp[ni] = id;
+            q.push(ni);
+          }
+        }
+    }
+    large.push_back(border || double(size) >= min_cells);
+  }
+  for (std::size_t i = 0; i < g.cell_count(); ++i) {
+    if (!m[i]) continue;
+    const int x = int(i % std::size_t(g.width)), y = int(i / std::size_t(g.width));
+    bool keep = false;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx)
+        if (g.in_bounds(x + dx, y + dy) && comp[g.index(x + dx, y + dy)] >= 0 && large[std::size_t(comp[g.index(x + dx, y + dy)])])
+          keep = true;
+    if (!keep) m[i] = 0;
+  }
+}
+
 void check_against_reference(const InflatedGrid& g, const Eigen::Vector2f& robot_xy, const GoalBlacklist& bl, double now,
                              const FrontierSettings& s, const FrontierResult& r) {
-  const std::vector<std::uint8_t> m = reference_mask(g.state, g.width, g.height);
+  std::vector<std::uint8_t> m = reference_mask(g.state, g.width, g.height);
+  reference_drop_pockets(g, s.min_unknown_region_m2, m);
   std::vector<int> label;
   const std::vector<RefCluster> rc = reference_clusters(m, g.width, g.height, s.min_cluster_cells, label);
   ASSERT_EQ(r.clusters.size(), rc.size());
@@ -190,17 +275,26 @@ void check_against_reference(const InflatedGrid& g, const Eigen::Vector2f& robot
   const Eigen::Vector2i rcell = g.cell_of(robot_xy);
   ASSERT_TRUE(g.traversable[g.index(rcell.x(), rcell.y())]) << "test setup: robot must be on a traversable cell";
   const std::vector<double> dist = reference_distances(g, g.index(rcell.x(), rcell.y()));
+  std::vector<long> src;
+  std::vector<char> approach;
+  reference_approach(g, label, rc.size(), s.approach_radius_m, src, approach);
+  // Each cluster's candidate cells: its frontier cells and the approach cells its cells claimed.
+  std::vector<std::vector<std::size_t>> cand_cells(rc.size());
+  for (std::size_t k = 0; k < rc.size(); ++k) cand_cells[k] = rc[k].cells;
+  for (std::size_t c = 0; c < g.cell_count(); ++c)
+    if (approach[c]) cand_cells[std::size_t(label[std::size_t(src[c])])].push_back(c);
   double best = std::numeric_limits<double>::infinity();
   bool any_connected = false;
   for (std::size_t k = 0; k < rc.size(); ++k) {
     double near = std::numeric_limits<double>::infinity();
     bool cand_free = false, cand_blocked = false;
-    for (auto c : rc[k].cells) {
+    for (auto c : cand_cells[k]) {
       near = std::min(near, dist[c]);
       if (!std::isfinite(dist[c]) || !connected(g, c)) continue;
       any_connected = true;
       if (dist[c] < s.min_goal_distance_m - 1e-3 * g.resolution_m) continue;
-      const bool blk = bl.blocks(g.cell_center(c), s.blacklist_radius_m, now);
+      const bool blk = bl.blocks(g.cell_center(c), s.blacklist_radius_m, now) ||
+                       (approach[c] && bl.blocks(g.cell_center(std::size_t(src[c])), s.blacklist_radius_m, now));
       (blk ? cand_blocked : cand_free) = true;
       if (!blk) best = std::min(best, dist[c]);
     }
@@ -223,11 +317,18 @@ void check_against_reference(const InflatedGrid& g, const Eigen::Vector2f& robot
   // The goal is a valid candidate at that distance.
   const Eigen::Vector2i gc = g.cell_of(r.goal_xy);
   const std::size_t gi = g.index(gc.x(), gc.y());
-  EXPECT_TRUE(m[gi]);
-  EXPECT_GE(label[gi], 0);
+  EXPECT_TRUE((m[gi] && label[gi] >= 0) || approach[gi]);
   EXPECT_TRUE(connected(g, gi));
   EXPECT_FALSE(bl.blocks(r.goal_xy, s.blacklist_radius_m, now));
   EXPECT_NEAR(dist[gi], best, 1e-3);
+  // The target: the goal itself, or the frontier cell an approach goal is for (within the radius).
+  if (approach[gi]) {
+    EXPECT_EQ(g.cell_of(r.target_xy), g.cell_of(g.cell_center(std::size_t(src[gi]))));
+    EXPECT_LE((r.target_xy - r.goal_xy).norm(), s.approach_radius_m + 1e-4f);
+    EXPECT_FALSE(bl.blocks(r.target_xy, s.blacklist_radius_m, now));
+  } else {
+    EXPECT_EQ(r.target_xy, r.goal_xy);
+  }
   // The path: robot cell -> goal over traversable cells, no corner cutting, length = path_length_m.
   ASSERT_FALSE(r.path.empty());
   EXPECT_EQ(g.cell_of(r.path.front()), rcell);
@@ -314,12 +415,14 @@ TEST(Frontier, MatchesReferenceOnRandomGrids) {
     std::mt19937 rng(seed);
     std::uniform_int_distribution<std::size_t> pick(0, trav.size() - 1);
     FrontierWorkspace ws;
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < 8; ++k) {  // k < 4: approach cells within 1 m; 4..7: none (0 m) or 0.3 m
       FrontierSettings s;
-      s.min_cluster_cells = 1 + k;
-      s.min_goal_distance_m = k == 2 ? 0.0f : 0.5f;
+      s.min_cluster_cells = 1 + k % 4;
+      s.min_goal_distance_m = k % 4 == 2 ? 0.0f : 0.5f;
+      s.approach_radius_m = k < 4 ? 1.0f : k == 5 ? 0.3f : 0.0f;
+      if (k % 3 == 1) s.min_unknown_region_m2 = seed % 2 ? 0.01f : 0.1f;  // 4 or 40 cells at 0.05 m
       GoalBlacklist bl;
-      if (k == 3) bl.add(g.cell_center(trav[pick(rng)]), 0.0, 10.0);
+      if (k % 4 == 3) bl.add(g.cell_center(trav[pick(rng)]), 0.0, 10.0);
       const Eigen::Vector2f robot = g.cell_center(trav[pick(rng)]);
       const FrontierResult r = find_frontier(g, robot, bl, 1.0, s, ws);
       SCOPED_TRACE(::testing::Message() << "seed " << seed << " k " << k);
@@ -417,6 +520,93 @@ TEST(Frontier, DoorwayBlacklistExpiryAndMinDistance) {
   FrontierSettings big = s;
   big.min_cluster_cells = 7;
   EXPECT_EQ(find_frontier(g, robot, bl, 0.0, big, ws).status, FrontierStatus::kNoFrontier);
+}
+
+// A gap seen from afar: beyond a 2-cell opening in the room's wall a walled 2-cell (0.1 m) passage,
+// narrower than the robot, leads 0.7 m to the unknown. No frontier cell is traversable: without
+// approach cells nothing is reachable; with them the goal is a room cell in front of the passage.
+TEST(Frontier, NarrowFrontierIsReachedThroughApproachCells) {
+  TestGrid tg = closed_room();
+  tg.rect(31, 18, 31, 19, kFree);  // the opening
+  tg.rect(32, 17, 45, 17, kOcc);   // the passage's walls
+  tg.rect(32, 20, 45, 20, kOcc);
+  tg.rect(32, 18, 45, 19, kFree);  // the passage; unknown beyond x = 45
+  InflationSettings is;
+  is.robot_radius_m = 0.1f;
+  InflatedGrid g;
+  inflate(tg.view(), is, g);
+  FrontierWorkspace ws;
+  FrontierSettings s;
+  s.min_cluster_cells = 1;
+  s.approach_radius_m = 0.0f;
+  const Eigen::Vector2f robot = g.cell_center(10, 18);
+  GoalBlacklist bl;
+  FrontierResult r = find_frontier(g, robot, bl, 0.0, s, ws);
+  ASSERT_EQ(r.clusters.size(), 1u);
+  EXPECT_EQ(r.status, FrontierStatus::kAllUnreachable);
+  check_against_reference(g, robot, bl, 0.0, s, r);
+  s.approach_radius_m = 1.0f;
+  r = find_frontier(g, robot, bl, 0.0, s, ws);
+  ASSERT_EQ(r.status, FrontierStatus::kFound);
+  check_against_reference(g, robot, bl, 0.0, s, r);
+  const Eigen::Vector2i gc = g.cell_of(r.goal_xy), tc = g.cell_of(r.target_xy);
+  EXPECT_TRUE(g.traversable[g.index(gc.x(), gc.y())]);
+  EXPECT_FALSE(g.traversable[g.index(tc.x(), tc.y())]);
+  EXPECT_EQ(tc.x(), 45);  // the target is a frontier cell at the passage's end
+  EXPECT_LE(gc.x(), 30);  // the goal is in the room
+  EXPECT_LE((r.target_xy - r.goal_xy).norm(), 1.0f + 1e-4f);
+  EXPECT_TRUE(r.clusters[0].reachable);
+  // The workspace is clean for the next call: the same search without approach cells again.
+  s.approach_radius_m = 0.0f;
+  EXPECT_EQ(find_frontier(g, robot, bl, 0.0, s, ws).status, FrontierStatus::kAllUnreachable);
+  // Blacklisting the target blocks every approach cell of it.
+  s.approach_radius_m = 1.0f;
+  bl.add(r.target_xy, 0.0, 10.0);
+  s.blacklist_radius_m = 1.0f;
+  r = find_frontier(g, robot, bl, 1.0, s, ws);
+  EXPECT_NE(r.status, FrontierStatus::kFound);
+  check_against_reference(g, robot, bl, 1.0, s, r);
+  FrontierSettings bad;
+  bad.approach_radius_m = -1.0f;
+  EXPECT_DUET_ERROR((void)find_frontier(g, robot, bl, 0.0, bad, ws), ErrorCode::kInvalidArgument, "approach_radius_m");
+}
+
+// Enclosed unknown pockets: a pillar's inside (never seen) in a known room, and a closet whose
+// unknown inside is 5 x 5 cells, next to an open side of the room towards a large unknown area.
+TEST(Frontier, EnclosedUnknownPocketsAreNotFrontiers) {
+  TestGrid tg = blank(60, 40, kNaN);
+  tg.rect(4, 4, 31, 31, kOcc);
+  tg.rect(5, 5, 30, 30, kFree);
+  tg.rect(31, 10, 31, 14, kFree);  // an opening to the unknown east (large region)
+  tg.rect(14, 14, 16, 16, kNaN);   // a 3 x 3 unknown pocket (a pillar's inside seen all around)
+  tg.rect(20, 20, 24, 24, kNaN);   // a 5 x 5 pocket
+  InflationSettings is;
+  is.robot_radius_m = 0.05f;
+  InflatedGrid g;
+  inflate(tg.view(), is, g);
+  FrontierWorkspace ws;
+  FrontierSettings s;
+  s.min_cluster_cells = 1;
+  const Eigen::Vector2f robot = g.cell_center(8, 8);
+  FrontierResult r = find_frontier(g, robot, GoalBlacklist{}, 0.0, s, ws);
+  EXPECT_EQ(r.clusters.size(), 3u);  // both pockets' rings and the opening
+  check_against_reference(g, robot, GoalBlacklist{}, 0.0, s, r);
+  s.min_unknown_region_m2 = 0.04f;  // 16 cells: the 3 x 3 pocket goes
+  r = find_frontier(g, robot, GoalBlacklist{}, 0.0, s, ws);
+  EXPECT_EQ(r.clusters.size(), 2u);
+  check_against_reference(g, robot, GoalBlacklist{}, 0.0, s, r);
+  s.min_unknown_region_m2 = 0.5f;  // 200 cells: both pockets go; the east region is open to the border
+  r = find_frontier(g, robot, GoalBlacklist{}, 0.0, s, ws);
+  ASSERT_EQ(r.clusters.size(), 1u);
+  check_against_reference(g, robot, GoalBlacklist{}, 0.0, s, r);
+  ASSERT_EQ(r.status, FrontierStatus::kFound);
+  EXPECT_EQ(g.cell_of(r.goal_xy).x(), 31);
+  // The workspace is clean for the next call (verdicts reset): the first result again.
+  s.min_unknown_region_m2 = 0.0f;
+  EXPECT_EQ(find_frontier(g, robot, GoalBlacklist{}, 0.0, s, ws).clusters.size(), 3u);
+  FrontierSettings bad;
+  bad.min_unknown_region_m2 = -1.0f;
+  EXPECT_DUET_ERROR((void)find_frontier(g, robot, GoalBlacklist{}, 0.0, bad, ws), ErrorCode::kInvalidArgument, "min_unknown_region_m2");
 }
 
 TEST(Frontier, RobotBlockedAndBorderFrontiers) {

@@ -334,6 +334,36 @@ TEST(Exploration, LowRewardFallsBackToTheFrontier) {
   EXPECT_EQ(d3.status, ExplorationStatus::kFrontierGoal) << to_string(d3.status);
 }
 
+// The door of door_room() replaced by a walled passage of 0.2 m (narrower than the robot) that
+// ends in the unknown 0.5 m beyond the wall: the frontier goal is an approach cell in the room,
+// facing the passage's end (the frontier cell it is for).
+TEST(Exploration, NarrowFrontierGoalFacesItsTarget) {
+  TestGrid g(200, 200);
+  g.room(20, 60, 100, 140);
+  for (int x = 100; x <= 110; ++x) {
+    g.at(x, 97) = kOccL;
+    g.at(x, 102) = kOccL;
+    for (int y = 98; y <= 101; ++y) g.at(x, y) = kFreeL;
+  }
+  Prepared p(g);
+  const auto sensors = paper_dual_sensors(30);
+  ExplorationWorkspace ws;
+  ExplorationSettings s;
+  s.eps_r_bits = 1e9f;  // the frontier search decides
+  s.frontier.approach_radius_m = 1.0f;
+  GoalBlacklist bl;
+  const Pose2 robot{2.0f, 5.0f, 3.14159f};
+  const ExplorationDecision d = decide_goal(p.model, p.inflated, robot, sensors, bl, 0.0, s, ws);
+  ASSERT_EQ(d.status, ExplorationStatus::kFrontierGoal) << to_string(d.status);
+  const Eigen::Vector2f look = d.frontier.target_xy - d.frontier.goal_xy;
+  ASSERT_GT(look.norm(), 0.0f);  // an approach cell
+  EXPECT_LT(d.goal.x, 5.0f);     // in the room
+  EXPECT_GT(d.frontier.target_xy.x(), 5.0f);  // the passage's end
+  EXPECT_NEAR(d.goal.theta, std::atan2(look.y(), look.x()), 1e-5f);
+  s.frontier.approach_radius_m = 0.0f;  // without approach cells the passage is unreachable
+  EXPECT_EQ(decide_goal(p.model, p.inflated, robot, sensors, bl, 0.0, s, ws).status, ExplorationStatus::kAllUnreachable);
+}
+
 TEST(PartialSim, EmbreeAndDdaModelsGiveTheSameDecision) {
   const TestGrid g = door_room();
   Prepared pd(g, ObservationBackend::kDda), pe(g, ObservationBackend::kEmbree);

@@ -102,6 +102,44 @@ TEST(Explorer, GoalWithNoStandingRoomNearbyIsAbandoned) {
   EXPECT_EQ(cmd.omega, 0.0f);
 }
 
+// The robot boxed in by a dotted ring of observed-but-uncertain cells (they block by default): the
+// frontier search on the planning grid reaches nothing, the search on the relaxed grid (uncertain
+// cells not blocking) finds the frontier, and the robot gets a goal and a path instead of stopping.
+TEST(Explorer, BoxedInByUncertainCellsTakesARelaxedGoal) {
+  duet::Profile p = frontier_only_profile();
+  ASSERT_TRUE(p.exploration.inflation.uncertain_is_obstacle);
+  p.exploration.strategy.frontier.min_unknown_region_m2 = 0.5f;  // the ring (~0.2 m^2) is no frontier
+  duet::ExplorerSettings s;
+  duet::Explorer e(p, s);
+  const duet::Pose2 robot{1.0f, 1.5f, 0.0f};
+  duet::OccupancyGrid g = half_known_room();
+  for (int y = 0; y < g.height(); ++y)
+    for (int x = 0; x < 80; ++x) {
+      const float d = (g.cell_center(x, y) - Eigen::Vector2f(robot.x, robot.y)).norm();
+      // A dotted ring of cells seen but neither free nor occupied (speckle at grazing angles).
+      if (d > 0.6f && d < 0.66f && (x + y) % 4 == 0) g.logodds()[g.index(x, y)] = 0.0f;
+    }
+  e.update_map(g, robot, 0.0);
+  (void)e.control(robot, duet::Twist{}, 0.0);
+  ASSERT_FALSE(e.decisions().empty());
+  EXPECT_TRUE(e.decisions().front().relaxed);
+  EXPECT_EQ(e.decisions().front().status, duet::ExplorationStatus::kFrontierGoal);
+  ASSERT_TRUE(e.goal().has_value());
+  EXPECT_EQ(e.stats().relaxed_goals, 1);
+  EXPECT_GT(e.goal()->x, 3.0f);  // towards the frontier at x = 4 m
+  EXPECT_FALSE(e.path().empty());
+  // The planning grid is the relaxed one while the goal is active: the ring does not block there.
+  // The path leaves the ring through cells the planning grid blocks.
+  std::size_t blocked = 0;
+  for (const Eigen::Vector2f& w : e.path()) {
+    const Eigen::Vector2i c = e.inflated().cell_of(w);
+    blocked += e.inflated().traversable[e.inflated().index(c.x(), c.y())] == 0;
+    EXPECT_NE(e.planning_grid().traversable[e.planning_grid().index(c.x(), c.y())], 0);
+  }
+  EXPECT_GT(blocked, 0u);
+  EXPECT_EQ(e.state(), duet::ExplorerState::kExploring);
+}
+
 TEST(Explorer, InvalidStandoffSearchThrows) {
   const duet::Profile p = frontier_only_profile();
   for (const float bad : {-0.1f, 5.5f, std::numeric_limits<float>::quiet_NaN()}) {

@@ -369,6 +369,8 @@ TEST(Profile, ExplorationSectionCarriesTheDefaultsAndTheSensorFans) {
   EXPECT_FLOAT_EQ(ex.dwa.robot_radius_m, ex.inflation.robot_radius_m);  // one source
   EXPECT_FALSE(ex.inflation.unknown_is_obstacle);  // frontiers stay reachable
   EXPECT_TRUE(ex.inflation.uncertain_is_obstacle);  // faces seen at grazing angles block
+  EXPECT_FLOAT_EQ(ex.strategy.frontier.approach_radius_m, 0.0f);     // measured worse on Willow
+  EXPECT_FLOAT_EQ(ex.strategy.frontier.min_unknown_region_m2, 0.5f);  // enclosed pockets are no frontiers
   EXPECT_FLOAT_EQ(ex.observation.thresholds.occupied_logodds, ex.cells.occupied_logodds);
   EXPECT_FLOAT_EQ(ex.dwa.limits.max_v_mps, 0.5f);
   EXPECT_TRUE(ex.strategy.use_simulation);
@@ -421,6 +423,10 @@ TEST(ProfileErrors, ExplorationKeysAreCheckedLikeTheRest) {
     const duet::Error e = load_error(dir, dual_with("    uncertain_is_obstacle: true ", "    uncertain_is_obstacle: maybe "));
     EXPECT_EQ(e.code(), duet::ErrorCode::kParse);
     expect_contains(e.what(), "exploration.inflation.uncertain_is_obstacle");
+  }
+  {
+    const duet::Error e = load_error(dir, dual_with("    approach_radius_m: 0.0 ", "    approach_radius_m: -1.0 "));
+    expect_contains(e.what(), "approach_radius_m");
   }
   {
     const duet::Error e = load_error(dir, dual_with("    gamma: 0.9 ", "    gamma: fast "));

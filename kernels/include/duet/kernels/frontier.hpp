@@ -11,6 +11,13 @@
 ///    grid (the area outside the grid is not "unknown").
 ///  - Connected frontier cell (§3.2): a frontier cell whose eight neighbours all lie inside the grid
 ///    (so it is not on the grid border). Only connected cells can be goals.
+///  - Enclosed unknown pockets (min_unknown_region_m2 > 0): a frontier cell all of whose unknown
+///    8-neighbours belong to an unknown region (8-connected kUnknown cells) smaller than
+///    min_unknown_region_m2 that does not touch the grid border is not a frontier here: such a
+///    region is the inside of an obstacle or the shadow of a pillar already seen from around it,
+///    not a way on (in a cluttered building they outnumber the real frontiers and the robot would
+///    chase them one by one). Regions are measured by a breadth-first search that stops as soon as
+///    it proves the region large (enough cells, the grid border, or a cell already proved large).
 ///  - Cluster: an 8-connected component of frontier cells. Clusters of fewer than
 ///    min_cluster_cells cells are noise: find_frontier ignores their cells entirely (no goal, not
 ///    listed, do not count for the status). frontier_mask() reports raw frontier cells.
@@ -30,6 +37,16 @@
 ///    that float sums like 10 x 0.05 m count as 0.5 m; ties: first popped, deterministic). `path` is
 ///    the shortest path to it (cell centres, robot cell first); it minimises length, not the
 ///    clearance-weighted cost of plan_path (re-plan with plan_path to follow it with clearance).
+///  - Approach cells (approach_radius_m > 0): a frontier the robot cannot stand on anywhere (a
+///    doorway seen from afar leaves a cone of known free cells narrower than the robot, and
+///    observed-but-uncertain cells block by default) is still worth going to: the robot sees it
+///    from nearby. A breadth-first search from the connected frontier cells of every kept cluster
+///    without a traversable cell (in ascending index order) spreads over kFree cells (8-connected)
+///    while within approach_radius_m (Euclidean, cell centres) of its source; a cell takes the
+///    source of whichever wave reaches it first. The traversable, non-frontier cells it reaches
+///    are approach cells: they count for their source's cluster exactly like frontier cells of
+///    it (reachability, path length, goal candidacy, blacklist). The goal may then be an approach
+///    cell; FrontierResult::target_xy is the frontier cell it looks at (= goal_xy otherwise).
 ///  - The search is not cut off at the goal: it covers the robot's whole traversable component so
 ///    that every cluster's reachability and distance are known.
 ///
@@ -54,6 +71,13 @@ struct FrontierSettings {
   int min_cluster_cells = 3;         ///< smaller frontier clusters are ignored (noise) [cells], >= 1
   float min_goal_distance_m = 0.5f;  ///< frontier goals nearer than this (path length) are skipped [m], >= 0 (paper §4.2: goals 0.5-10 m away)
   float blacklist_radius_m = 0.5f;   ///< a blacklisted goal blocks frontier cells within this (Euclidean, centre to goal) [m], >= 0
+  /// Frontier cells the robot cannot stand on are reached through approach cells within this
+  /// distance (see the file comment) [m], >= 0; 0 = only traversable frontier cells count (the
+  /// paper's definition, the default here; the robot profiles choose their own).
+  float approach_radius_m = 0.0f;
+  /// Frontier cells that border only enclosed unknown regions smaller than this are ignored (see
+  /// the file comment) [m^2], >= 0; 0 = every unknown region counts.
+  float min_unknown_region_m2 = 0.0f;
 };
 /// Throws duet::Error(kInvalidArgument) naming the field and its range.
 void validate(const FrontierSettings& s);
@@ -83,6 +107,9 @@ enum class FrontierStatus {
 struct FrontierResult {
   FrontierStatus status = FrontierStatus::kNoFrontier;
   Eigen::Vector2f goal_xy{0.0f, 0.0f};    ///< centre of the goal cell (world) [m]; set iff kFound
+  /// The frontier cell the goal is for (world) [m]: goal_xy for a frontier cell, the source
+  /// frontier cell for an approach cell (see approach_radius_m); set iff kFound.
+  Eigen::Vector2f target_xy{0.0f, 0.0f};
   float path_length_m = 0.0f;             ///< path length to the goal [m]; set iff kFound
   std::vector<Eigen::Vector2f> path;      ///< cell centres robot -> goal (world) [m]; empty unless kFound
   std::vector<FrontierCluster> clusters;  ///< kept clusters, ordered by their smallest cell index
@@ -117,7 +144,11 @@ class GoalBlacklist {
 
 /// Reusable buffers of find_frontier (grow to the grid size, reused without reallocation).
 struct FrontierWorkspace {
-  std::vector<std::uint8_t> mask;          ///< 1 = frontier cell (kept cluster after clustering)
+  std::vector<std::uint8_t> mask;          ///< 1 = frontier cell (kept cluster after clustering), 3 = approach cell
+  std::vector<std::uint32_t> approach_src; ///< approach BFS: source frontier cell of each visited cell (max = not visited)
+  std::vector<std::uint32_t> approach_queue;  ///< approach BFS: the visited cells in visiting order
+  std::vector<std::uint8_t> region;        ///< unknown-region verdicts: 0 not measured, 1 small, 2 large, 3 in the current search
+  std::vector<std::uint32_t> region_cells; ///< cells with a verdict (reset after the call)
   std::vector<std::uint32_t> frontier;     ///< frontier cell indices, ascending
   std::vector<std::uint32_t> row_count;    ///< per-row frontier counts (parallel compaction)
   std::vector<std::int32_t> label;         ///< cluster id of frontier cells (valid where mask = 1)

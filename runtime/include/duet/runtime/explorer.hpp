@@ -97,6 +97,9 @@ struct ExplorerStats {
   int local_fallbacks = 0;          ///< control periods the dynamic window fell back to the global grid
   int escapes = 0;                  ///< control periods spent escaping the dynamic window's margin
   int goals_moved = 0;              ///< goals moved off cells next to unknown space (decisions and re-checks)
+  /// Frontier goals found on the relaxed grid (observed-but-uncertain cells not blocking) after
+  /// the search on the planning grid reached no frontier: the robot was boxed in by such cells.
+  int relaxed_goals = 0;
   double decision_time_sum_s = 0.0;
   double decision_time_max_s = 0.0;
 };
@@ -111,6 +114,8 @@ struct DecisionRecord {
   bool planned = false;             ///< a path to the goal was found
   std::size_t frontier_cells = 0;   ///< frontier cells in kept clusters (when the search ran)
   int reachable_clusters = 0;       ///< frontier clusters the robot can reach (when the search ran)
+  std::size_t reached_cells = 0;    ///< cells the frontier search reached from the robot (when it ran)
+  bool relaxed = false;             ///< the goal came from the search on the relaxed grid
   Eigen::Vector2f nearest_frontier{0.0f, 0.0f};  ///< the nearest reachable cluster's nearest cell
   double wall_time_s = 0.0;         ///< how long decide_goal() took
 };
@@ -135,6 +140,9 @@ class Explorer {
   [[nodiscard]] const std::optional<Pose2>& goal() const noexcept { return goal_; }
   [[nodiscard]] const std::vector<Eigen::Vector2f>& path() const noexcept { return path_; }
   [[nodiscard]] const InflatedGrid& inflated() const noexcept { return inflated_; }
+  /// The grid paths are planned on: inflated(), or while a relaxed goal is active the same map
+  /// inflated with observed-but-uncertain cells not blocking (see ExplorerStats::relaxed_goals).
+  [[nodiscard]] const InflatedGrid& planning_grid() const noexcept { return relaxed_active_ ? relaxed_ : inflated_; }
   /// The dynamic window's grid: unknown cells are obstacles, the trail is free.
   [[nodiscard]] const InflatedGrid& local_grid() const noexcept { return local_; }
   [[nodiscard]] const ExplorationDecision& last_decision() const noexcept { return decision_; }
@@ -159,12 +167,21 @@ class Explorer {
   [[nodiscard]] std::optional<Eigen::Vector2f> standoff(const Eigen::Vector2f& target) const;
   /// Moves goal_ to standoff(goal_target_) if it is no longer such a cell; false if none.
   bool recheck_goal();
+  /// The map inflated with observed-but-uncertain cells not blocking, into relaxed_.
+  void build_relaxed();
+  /// After a decision whose frontier search found no goal (all unreachable or blacklisted or too
+  /// near, robot blocked) while uncertain cells block: the search again on the relaxed grid; true (and decision_ set
+  /// to its frontier goal, relaxed_active_) if it found one.
+  bool try_relaxed(const Pose2& robot, double now_s);
+  OccupancyGrid map_{0.05f};  ///< the latest map (for the relaxed grid)
 
   Profile profile_;
   ExplorerSettings settings_;
   std::vector<SensorSector> sectors_;
   ObservationModel model_;
   InflatedGrid inflated_;
+  InflatedGrid relaxed_;        ///< see planning_grid(); built only when needed
+  bool relaxed_active_ = false; ///< the current goal was found on relaxed_
   InflatedGrid local_;
   OccupancyGrid local_grid_{0.05f};
   std::vector<Eigen::Vector2f> trail_;  ///< robot positions, 0.05 m apart
