@@ -12,7 +12,6 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <atomic>
 #include <cmath>
 #include <cstring>
@@ -39,14 +38,22 @@ inline float bits_of(std::uint64_t sum) noexcept { return static_cast<float>(sta
 
 std::string fstr(float v) { return std::to_string(v); }
 
-/// Ray r of a fan, see sector_rays() in the header.
-inline void fan_ray(const Pose2& pose, const SensorSector& s, float c, float sn, int r, Eigen::Vector2f& o,
-                    Eigen::Vector2f& d) noexcept {
-  o = Eigen::Vector2f(pose.x + c * s.x_m - sn * s.y_m, pose.y + sn * s.x_m + c * s.y_m);
-  const float a = s.rays > 1 ? s.yaw_rad + pose.theta - 0.5f * s.fov_rad +
-                                   s.fov_rad * static_cast<float>(r) / static_cast<float>(s.rays - 1)
-                             : s.yaw_rad + pose.theta;
-  d = Eigen::Vector2f(std::cos(a), std::sin(a));
+/// Direction of ray r of a fan in the robot frame (see sector_rays() in the header).
+inline Eigen::Vector2f fan_dir(const SensorSector& s, int r) noexcept {
+  const float a = s.rays > 1 ? s.yaw_rad - 0.5f * s.fov_rad + s.fov_rad * static_cast<float>(r) / static_cast<float>(s.rays - 1)
+                             : s.yaw_rad;
+  return Eigen::Vector2f(std::cos(a), std::sin(a));
+}
+
+/// The sensor's origin at a pose whose heading has cosine c and sine sn.
+inline Eigen::Vector2f fan_origin(const Pose2& pose, const SensorSector& s, float c, float sn) noexcept {
+  return Eigen::Vector2f(pose.x + c * s.x_m - sn * s.y_m, pose.y + sn * s.x_m + c * s.y_m);
+}
+
+/// A robot-frame direction turned by the pose's heading: one sin/cos per pose, not per ray
+/// (the same expression as Procedure 1's rotated fans, so both see the same rays).
+inline Eigen::Vector2f turn(float c, float sn, const Eigen::Vector2f& f) noexcept {
+  return Eigen::Vector2f(c * f.x() - sn * f.y(), sn * f.x() + c * f.y());
 }
 
 }  // namespace
@@ -92,7 +99,10 @@ void sector_rays(const Pose2& pose, const SensorSector& s, std::span<Eigen::Vect
                                           std::to_string(s.rays) + " elements, got " + std::to_string(origins.size()) +
                                           " and " + std::to_string(dirs.size()));
   const float c = std::cos(pose.theta), sn = std::sin(pose.theta);
-  for (int r = 0; r < s.rays; ++r) fan_ray(pose, s, c, sn, r, origins[static_cast<std::size_t>(r)], dirs[static_cast<std::size_t>(r)]);
+  for (int r = 0; r < s.rays; ++r) {
+    origins[static_cast<std::size_t>(r)] = fan_origin(pose, s, c, sn);
+    dirs[static_cast<std::size_t>(r)] = turn(c, sn, fan_dir(s, r));
+  }
 }
 
 void validate(const ObservationSettings& s) {
@@ -742,6 +752,12 @@ void ObservationModel::observe(std::span<const Pose2> poses, std::span<const Sen
   }
   const std::size_t ns = sensors.size();
   const bool dda = m.settings.backend == ObservationBackend::kDda;
+  // Each sensor's fan in the robot frame, turned per pose (one sin/cos per pose, not per ray).
+  std::vector<std::vector<Eigen::Vector2f>> fans(ns);
+  for (std::size_t si = 0; si < ns; ++si) {
+    fans[si].resize(static_cast<std::size_t>(sensors[si].rays));
+    for (int r = 0; r < sensors[si].rays; ++r) fans[si][static_cast<std::size_t>(r)] = fan_dir(sensors[si], r);
+  }
   // One task item = one sensor's fan at one pose; per-ray outputs, so any partition gives the same.
   detail::for_each_index(poses.size() * ns, 1, [&](std::size_t job) {
     const std::size_t p = job / ns, si = job % ns;
@@ -749,41 +765,31 @@ void ObservationModel::observe(std::span<const Pose2> poses, std::span<const Sen
     const SensorSector& s = sensors[si];
     RayObservation* o = out.data() + p * total + first[si];
     const float c = std::cos(pose.theta), sn = std::sin(pose.theta);
+    const Eigen::Vector2f org = fan_origin(pose, s, c, sn);
+    const std::vector<Eigen::Vector2f>& fan = fans[si];
     if (dda) {
-      static const int mode = std::getenv("DUET_PF") ? std::atoi(std::getenv("DUET_PF")) : 0;
-      static const std::size_t thr = std::getenv("DUET_PFT") ? std::strtoull(std::getenv("DUET_PFT"), nullptr, 10) : Impl::kPrefetchBytes;
-      const bool prefetch = m.packed.size() * sizeof(std::uint32_t) > thr;
-      if (prefetch && mode == 1) {
-        for (int r = 0; r < s.rays; ++r) {
-          Eigen::Vector2f org, dir;
-          fan_ray(pose, s, c, sn, r, org, dir);
-          m.prefetch_ray(org, dir, s.max_range_m);
-        }
-      }
+      const bool prefetch = m.packed.size() * sizeof(std::uint32_t) > Impl::kPrefetchBytes;
       for (int r = 0; r < s.rays; ++r) {
-        Eigen::Vector2f org, dir;
-        fan_ray(pose, s, c, sn, r, org, dir);
-        if (prefetch && mode == 0) m.prefetch_ray(org, dir, s.max_range_m);
-        if (prefetch && mode == 2 && r + 2 < s.rays) {
-          Eigen::Vector2f o2, d2;
-          fan_ray(pose, s, c, sn, r + 2, o2, d2);
-          m.prefetch_ray(o2, d2, s.max_range_m);
-        }
+        const Eigen::Vector2f dir = turn(c, sn, fan[static_cast<std::size_t>(r)]);
+        if (prefetch) m.prefetch_ray(org, dir, s.max_range_m);
         o[r] = m.observe_dda_from_sensor(org, dir, s.min_range_m, s.max_range_m);
       }
       return;
     }
     for (int r0 = 0; r0 < s.rays; r0 += 8) {
       const int count = std::min(8, s.rays - r0);
-      Eigen::Vector2f org[8], dir[8];
-      for (int k = 0; k < count; ++k) fan_ray(pose, s, c, sn, r0 + k, org[k], dir[k]);
+      Eigen::Vector2f orgs[8], dir[8];
+      for (int k = 0; k < count; ++k) {
+        orgs[k] = org;
+        dir[k] = turn(c, sn, fan[static_cast<std::size_t>(r0 + k)]);
+      }
       float range[8];
       std::int64_t cell[8];
-      m.trace8(org, dir, count, s.min_range_m, s.max_range_m, range, cell);
+      m.trace8(orgs, dir, count, s.min_range_m, s.max_range_m, range, cell);
       for (int k = 0; k < count; ++k) {
-        const float blocked = m.blocked_before(org[k], dir[k], s.min_range_m);
+        const float blocked = m.blocked_before(org, dir[k], s.min_range_m);
         o[r0 + k] = blocked >= 0.0f ? RayObservation{0.0f, blocked, true, 0}
-                                    : m.sum_to(org[k], dir[k], s.min_range_m, s.max_range_m, range[k], cell[k]);
+                                    : m.sum_to(org, dir[k], s.min_range_m, s.max_range_m, range[k], cell[k]);
       }
     }
   });
