@@ -45,6 +45,8 @@ void validate(const ExplorerSettings& s) {
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::blacklist_ttl_s must be in (0, inf], got " + std::to_string(s.blacklist_ttl_s));
   if (!(s.goal_standoff_search_m >= 0.0f && s.goal_standoff_search_m <= 5.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::goal_standoff_search_m must be in [0, 5] m, got " + std::to_string(s.goal_standoff_search_m));
+  if (!(s.squeeze_margin_m >= 0.0f && s.squeeze_margin_m <= 1.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::squeeze_margin_m must be in [0, 1] m, got " + std::to_string(s.squeeze_margin_m));
   if (s.final_retries < 0 || s.final_retries > 1000)
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::final_retries must be in [0, 1000], got " + std::to_string(s.final_retries));
 }
@@ -115,6 +117,7 @@ void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double 
 void Explorer::build_relaxed() {
   InflationSettings relaxed = profile_.exploration.inflation;
   relaxed.uncertain_is_obstacle = false;
+  relaxed.robot_radius_m = relaxed_radius();
   inflate(GridView(map_), relaxed, relaxed_);
 }
 
@@ -153,8 +156,19 @@ bool Explorer::plan(const Pose2& robot) {
   return true;
 }
 
+float Explorer::relaxed_radius() const {
+  return std::min(profile_.exploration.inflation.robot_radius_m, profile_.chassis.radius_m + settings_.squeeze_margin_m);
+}
+
+DwaSettings Explorer::dwa_settings() const {
+  DwaSettings ds = profile_.exploration.dwa;
+  if (relaxed_active_) ds.robot_radius_m = std::min(ds.robot_radius_m, relaxed_radius());
+  return ds;
+}
+
 float Explorer::dwa_clearance() const {
-  return profile_.exploration.dwa.robot_radius_m + profile_.exploration.dwa.safety_margin_m;
+  const DwaSettings ds = dwa_settings();
+  return ds.robot_radius_m + ds.safety_margin_m;
 }
 
 bool Explorer::can_stand_on(int x, int y) const {
@@ -304,18 +318,19 @@ void Explorer::decide(const Pose2& robot, double now_s) {
 }
 
 std::optional<Twist> Explorer::escape(const Pose2& robot, const Twist& current) const {
-  const DwaSettings& ds = profile_.exploration.dwa;
+  const DwaSettings ds = dwa_settings();
+  const InflatedGrid& g = planning_grid();
   Eigen::Vector2i c;
-  if (!inflated_.cell_of(Eigen::Vector2f(robot.x, robot.y), c)) return std::nullopt;
-  const float here = inflated_.clearance_m[inflated_.index(c.x(), c.y())];
+  if (!g.cell_of(Eigen::Vector2f(robot.x, robot.y), c)) return std::nullopt;
+  const float here = g.clearance_m[g.index(c.x(), c.y())];
   if (!(here < dwa_clearance())) return std::nullopt;  // not hemmed in by seen obstacles: nothing to escape
   // The direction of the largest clearance among the cells 2 cells away.
   Eigen::Vector2f best_dir(0.0f, 0.0f);
   float best = here;
   for (int dy = -2; dy <= 2; ++dy)
     for (int dx = -2; dx <= 2; ++dx) {
-      if (std::max(std::abs(dx), std::abs(dy)) != 2 || !inflated_.in_bounds(c.x() + dx, c.y() + dy)) continue;
-      const float v = inflated_.clearance_m[inflated_.index(c.x() + dx, c.y() + dy)];
+      if (std::max(std::abs(dx), std::abs(dy)) != 2 || !g.in_bounds(c.x() + dx, c.y() + dy)) continue;
+      const float v = g.clearance_m[g.index(c.x() + dx, c.y() + dy)];
       if (v > best) {
         best = v;
         best_dir = Eigen::Vector2f(static_cast<float>(dx), static_cast<float>(dy)).normalized();
@@ -341,14 +356,14 @@ Twist Explorer::control(const Pose2& robot, const Twist& current, double now_s) 
     abandon(stats_.goals_abandoned_timeout, now_s);
     return Twist{};
   }
-  const DwaSettings& ds = profile_.exploration.dwa;
+  const DwaSettings ds = dwa_settings();
   const DwaState before = dwa_state_;
   DwaResult r = dwa_step(local_.clearance(), robot, current, path_, ds, dwa_state_, dwa_ws_);
   if (r.status == DwaStatus::kNoValidTrajectory) {
     // Hemmed in by cells nobody has seen (nearer than the sensors' min range, they stay
     // unknown): fall back to the global grid, where only seen obstacles count.
     dwa_state_ = before;
-    r = dwa_step(inflated_.clearance(), robot, current, path_, ds, dwa_state_, dwa_ws_);
+    r = dwa_step(planning_grid().clearance(), robot, current, path_, ds, dwa_state_, dwa_ws_);
     ++stats_.local_fallbacks;
   }
   switch (r.status) {

@@ -140,12 +140,45 @@ TEST(Explorer, BoxedInByUncertainCellsTakesARelaxedGoal) {
   EXPECT_EQ(e.state(), duet::ExplorerState::kExploring);
 }
 
+// A door of 0.5 m: the profile's radius (0.29 m) closes it, the relaxed radius (Kobuki 0.177 m +
+// 0.06 m) does not. The frontier beyond it is reached with the relaxed grid and dynamic window.
+TEST(Explorer, NarrowDoorIsPassedWithTheRelaxedRadius) {
+  const duet::Profile p = frontier_only_profile();
+  duet::Explorer e(p);
+  duet::OccupancyGrid g = half_known_room();
+  for (int y = 0; y < g.height(); ++y)
+    if (y < 24 || y > 33) g.logodds()[g.index(40, y)] = 3.5f;  // the wall at x = 2 m, door y in [1.2, 1.7) m
+  const duet::Pose2 robot{1.0f, 1.45f, 0.0f};
+  e.update_map(g, robot, 0.0);
+  (void)e.control(robot, duet::Twist{}, 0.0);
+  ASSERT_FALSE(e.decisions().empty());
+  EXPECT_TRUE(e.decisions().front().relaxed);
+  ASSERT_TRUE(e.goal().has_value());
+  EXPECT_GT(e.goal()->x, 2.5f);  // beyond the door
+  EXPECT_EQ(e.stats().relaxed_goals, 1);
+  const Eigen::Vector2i door = e.inflated().cell_of(Eigen::Vector2f(2.025f, 1.425f));
+  EXPECT_EQ(e.inflated().traversable[e.inflated().index(door.x(), door.y())], 0);
+  EXPECT_NE(e.planning_grid().traversable[e.planning_grid().index(door.x(), door.y())], 0);
+  EXPECT_NEAR(e.planning_grid().robot_radius_m, p.chassis.radius_m + duet::ExplorerSettings{}.squeeze_margin_m, 1e-6f);
+  // With no squeeze allowed (margin up to the profile's radius) the door stays shut: nothing to do.
+  duet::ExplorerSettings s;
+  s.squeeze_margin_m = 1.0f;
+  duet::Explorer shut(p, s);
+  shut.update_map(g, robot, 0.0);
+  (void)shut.control(robot, duet::Twist{}, 0.0);
+  EXPECT_FALSE(shut.goal().has_value());
+  EXPECT_EQ(shut.stats().relaxed_goals, 0);
+}
+
 TEST(Explorer, InvalidStandoffSearchThrows) {
   const duet::Profile p = frontier_only_profile();
   for (const float bad : {-0.1f, 5.5f, std::numeric_limits<float>::quiet_NaN()}) {
     duet::ExplorerSettings s;
     s.goal_standoff_search_m = bad;
     EXPECT_THROW(duet::Explorer(p, s), duet::Error) << bad;
+    duet::ExplorerSettings m;
+    m.squeeze_margin_m = bad * 10.0f;  // -1, 55, NaN
+    EXPECT_THROW(duet::Explorer(p, m), duet::Error) << bad;
   }
 }
 

@@ -74,6 +74,12 @@ struct ExplorerSettings {
   /// How far a goal may be moved off cells next to unknown space (see the goal life cycle) [m],
   /// [0, 5]; 0 = never move a goal (it is then abandoned when next to unknown cells).
   float goal_standoff_search_m = 0.75f;
+  /// When the frontier search reaches no goal, it runs again on a relaxed grid: observed-but-
+  /// uncertain cells do not block, and the robot's radius (planner and dynamic window) shrinks
+  /// to the chassis' radius + this margin if that is smaller than the profile's [m], [0, 1].
+  /// A door that new wall cells narrowed behind the robot can so still be passed (the paper's
+  /// footprint radius 0.23 m + 0.06 m leaves the Kobuki's 0.177 m body 0.11 m).
+  float squeeze_margin_m = 0.06f;
 };
 void validate(const ExplorerSettings& s);
 
@@ -141,7 +147,8 @@ class Explorer {
   [[nodiscard]] const std::vector<Eigen::Vector2f>& path() const noexcept { return path_; }
   [[nodiscard]] const InflatedGrid& inflated() const noexcept { return inflated_; }
   /// The grid paths are planned on: inflated(), or while a relaxed goal is active the same map
-  /// inflated with observed-but-uncertain cells not blocking (see ExplorerStats::relaxed_goals).
+  /// inflated with observed-but-uncertain cells not blocking and the relaxed radius (see
+  /// ExplorerSettings::squeeze_margin_m, ExplorerStats::relaxed_goals).
   [[nodiscard]] const InflatedGrid& planning_grid() const noexcept { return relaxed_active_ ? relaxed_ : inflated_; }
   /// The dynamic window's grid: unknown cells are obstacles, the trail is free.
   [[nodiscard]] const InflatedGrid& local_grid() const noexcept { return local_; }
@@ -157,8 +164,12 @@ class Explorer {
   bool plan(const Pose2& robot);
   void abandon(int& counter, double now_s);
   [[nodiscard]] std::optional<Twist> escape(const Pose2& robot, const Twist& current) const;
-  /// The dynamic window's radius + safety margin [m].
+  /// The dynamic window's radius + safety margin [m] (of dwa_settings()).
   [[nodiscard]] float dwa_clearance() const;
+  /// The profile's dynamic window settings, with the relaxed radius while a relaxed goal is active.
+  [[nodiscard]] DwaSettings dwa_settings() const;
+  /// min(profile's inflation radius, chassis radius + squeeze_margin_m) [m].
+  [[nodiscard]] float relaxed_radius() const;
   /// Cell (x, y) is traversable globally and clear of unknown cells by dwa_clearance() on the
   /// dynamic window's grid (false outside either grid).
   [[nodiscard]] bool can_stand_on(int x, int y) const;
