@@ -45,6 +45,8 @@ void validate(const ExplorerSettings& s) {
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::blacklist_ttl_s must be in (0, inf], got " + std::to_string(s.blacklist_ttl_s));
   if (!(s.goal_standoff_search_m >= 0.0f && s.goal_standoff_search_m <= 5.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::goal_standoff_search_m must be in [0, 5] m, got " + std::to_string(s.goal_standoff_search_m));
+  if (!(s.boxed_in_area_m2 >= 0.0f && std::isfinite(s.boxed_in_area_m2)))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::boxed_in_area_m2 must be in [0, inf) m^2, got " + std::to_string(s.boxed_in_area_m2));
   if (!(s.squeeze_margin_m >= 0.0f && s.squeeze_margin_m <= 1.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::squeeze_margin_m must be in [0, 1] m, got " + std::to_string(s.squeeze_margin_m));
   if (s.final_retries < 0 || s.final_retries > 1000)
@@ -122,9 +124,13 @@ void Explorer::build_relaxed() {
 }
 
 bool Explorer::try_relaxed(const Pose2& robot, double now_s) {
-  if (!profile_.exploration.inflation.uncertain_is_obstacle || map_.width() == 0) return false;
+  if (map_.width() == 0 || !decision_.frontier_searched) return false;
   if (decision_.status != ExplorationStatus::kAllUnreachable && decision_.status != ExplorationStatus::kRobotBlocked &&
       decision_.status != ExplorationStatus::kAllBlacklisted)
+    return false;
+  // Only when boxed in: the search reached a small area from the robot (none if it is blocked).
+  const double cell_m2 = static_cast<double>(inflated_.resolution_m) * static_cast<double>(inflated_.resolution_m);
+  if (!(static_cast<double>(decision_.frontier.reached_cells) * cell_m2 < static_cast<double>(settings_.boxed_in_area_m2)))
     return false;
   build_relaxed();
   const ExplorationSettings& s = profile_.exploration.strategy;

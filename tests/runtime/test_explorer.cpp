@@ -168,6 +168,16 @@ TEST(Explorer, NarrowDoorIsPassedWithTheRelaxedRadius) {
   (void)shut.control(robot, duet::Twist{}, 0.0);
   EXPECT_FALSE(shut.goal().has_value());
   EXPECT_EQ(shut.stats().relaxed_goals, 0);
+  // Not boxed in: the robot's side of the door (~4 m^2 of traversable cells) is more than 1 m^2.
+  duet::ExplorerSettings big;
+  big.boxed_in_area_m2 = 1.0f;
+  duet::Explorer open_side(p, big);
+  open_side.update_map(g, robot, 0.0);
+  (void)open_side.control(robot, duet::Twist{}, 0.0);
+  EXPECT_FALSE(open_side.goal().has_value());
+  EXPECT_EQ(open_side.stats().relaxed_goals, 0);
+  ASSERT_FALSE(open_side.decisions().empty());
+  EXPECT_GT(open_side.decisions().front().reached_cells, 400u);  // 1 m^2 at 0.05 m
 }
 
 TEST(Explorer, InvalidStandoffSearchThrows) {
@@ -179,6 +189,9 @@ TEST(Explorer, InvalidStandoffSearchThrows) {
     duet::ExplorerSettings m;
     m.squeeze_margin_m = bad * 10.0f;  // -1, 55, NaN
     EXPECT_THROW(duet::Explorer(p, m), duet::Error) << bad;
+    duet::ExplorerSettings a;
+    a.boxed_in_area_m2 = bad < 0.0f || std::isnan(bad) ? bad : std::numeric_limits<float>::infinity();
+    EXPECT_THROW(duet::Explorer(p, a), duet::Error) << bad;
   }
 }
 

@@ -80,6 +80,11 @@ struct ExplorerSettings {
   /// A door that new wall cells narrowed behind the robot can so still be passed (the paper's
   /// footprint radius 0.23 m + 0.06 m leaves the Kobuki's 0.177 m body 0.11 m).
   float squeeze_margin_m = 0.06f;
+  /// ... but only when the robot is boxed in: the search reached less than this area of
+  /// traversable cells from it (or none) [m^2], [0, inf); 0 = never relax. At the end of an
+  /// exploration the frontiers left are unreachable too, but from a large area: relaxing then
+  /// squeezes the robot into gaps between furniture (lab, 10 seeds: 2 collisions with, 0 without).
+  float boxed_in_area_m2 = 10.0f;
 };
 void validate(const ExplorerSettings& s);
 
@@ -181,7 +186,7 @@ class Explorer {
   /// The map inflated with observed-but-uncertain cells not blocking, into relaxed_.
   void build_relaxed();
   /// After a decision whose frontier search found no goal (all unreachable or blacklisted or too
-  /// near, robot blocked) while uncertain cells block: the search again on the relaxed grid; true (and decision_ set
+  /// near, robot blocked) from a small area (boxed_in_area_m2): the search again on the relaxed grid; true (and decision_ set
   /// to its frontier goal, relaxed_active_) if it found one.
   bool try_relaxed(const Pose2& robot, double now_s);
   OccupancyGrid map_{0.05f};  ///< the latest map (for the relaxed grid)
