@@ -53,7 +53,7 @@
 /// Thread safety: GoalBlacklist is a value type (concurrent const use is safe; writes need
 /// exclusive access). frontier_mask() and find_frontier() are reentrant; they run TBB-parallel
 /// (frontier mask, frontier-cell list) in the caller's arena and their results do not depend on
-/// the thread count; the clustering and the search are serial. One FrontierWorkspace per
+/// the thread count; the pocket and approach searches, the clustering and the search are serial. One FrontierWorkspace per
 /// concurrent call.
 #include <duet/kernels/grid_view.hpp>
 #include <duet/kernels/inflation.hpp>
