@@ -31,6 +31,21 @@ const char* to_string(ExplorationStatus s) {
   return "unknown";
 }
 
+Pose2 frontier_goal_pose(const FrontierResult& f, const Pose2& robot) {
+  Pose2 g{f.goal_xy.x(), f.goal_xy.y(), 0.0f};
+  const auto& path = f.path;
+  const Eigen::Vector2f look = f.target_xy - f.goal_xy;
+  if (look.squaredNorm() > 0.0f) {  // an approach cell: face the frontier cell it is for
+    g.theta = std::atan2(look.y(), look.x());
+  } else if (path.size() >= 2) {
+    const Eigen::Vector2f dir = path.back() - path[path.size() - 2];
+    g.theta = std::atan2(dir.y(), dir.x());
+  } else {
+    g.theta = std::atan2(g.y - robot.y, g.x - robot.x);
+  }
+  return g;
+}
+
 ExplorationDecision decide_goal(const ObservationModel& model, const InflatedGrid& inflated, const Pose2& robot,
                                 std::span<const SensorSector> sensors, const GoalBlacklist& blacklist,
                                 double now_s, const ExplorationSettings& s, ExplorationWorkspace& ws) {
@@ -84,18 +99,7 @@ ExplorationDecision decide_goal(const ObservationModel& model, const InflatedGri
   switch (d.frontier.status) {
     case FrontierStatus::kFound: {
       d.status = ExplorationStatus::kFrontierGoal;
-      d.goal.x = d.frontier.goal_xy.x();
-      d.goal.y = d.frontier.goal_xy.y();
-      const auto& path = d.frontier.path;
-      const Eigen::Vector2f look = d.frontier.target_xy - d.frontier.goal_xy;
-      if (look.squaredNorm() > 0.0f) {  // an approach cell: face the frontier cell it is for
-        d.goal.theta = std::atan2(look.y(), look.x());
-      } else if (path.size() >= 2) {
-        const Eigen::Vector2f dir = path.back() - path[path.size() - 2];
-        d.goal.theta = std::atan2(dir.y(), dir.x());
-      } else {
-        d.goal.theta = std::atan2(d.goal.y - robot.y, d.goal.x - robot.x);
-      }
+      d.goal = frontier_goal_pose(d.frontier, robot);
       break;
     }
     case FrontierStatus::kNoFrontier: d.status = ExplorationStatus::kNoFrontier; break;

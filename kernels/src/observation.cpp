@@ -38,23 +38,9 @@ inline float bits_of(std::uint64_t sum) noexcept { return static_cast<float>(sta
 
 std::string fstr(float v) { return std::to_string(v); }
 
-/// Direction of ray r of a fan in the robot frame (see sector_rays() in the header).
-inline Eigen::Vector2f fan_dir(const SensorSector& s, int r) noexcept {
-  const float a = s.rays > 1 ? s.yaw_rad - 0.5f * s.fov_rad + s.fov_rad * static_cast<float>(r) / static_cast<float>(s.rays - 1)
-                             : s.yaw_rad;
-  return Eigen::Vector2f(std::cos(a), std::sin(a));
-}
-
-/// The sensor's origin at a pose whose heading has cosine c and sine sn.
-inline Eigen::Vector2f fan_origin(const Pose2& pose, const SensorSector& s, float c, float sn) noexcept {
-  return Eigen::Vector2f(pose.x + c * s.x_m - sn * s.y_m, pose.y + sn * s.x_m + c * s.y_m);
-}
-
-/// A robot-frame direction turned by the pose's heading: one sin/cos per pose, not per ray
-/// (the same expression as Procedure 1's rotated fans, so both see the same rays).
-inline Eigen::Vector2f turn(float c, float sn, const Eigen::Vector2f& f) noexcept {
-  return Eigen::Vector2f(c * f.x() - sn * f.y(), sn * f.x() + c * f.y());
-}
+using detail::fan_direction;
+using detail::fan_origin;
+using detail::turn;
 
 }  // namespace
 
@@ -101,7 +87,7 @@ void sector_rays(const Pose2& pose, const SensorSector& s, std::span<Eigen::Vect
   const float c = std::cos(pose.theta), sn = std::sin(pose.theta);
   for (int r = 0; r < s.rays; ++r) {
     origins[static_cast<std::size_t>(r)] = fan_origin(pose, s, c, sn);
-    dirs[static_cast<std::size_t>(r)] = turn(c, sn, fan_dir(s, r));
+    dirs[static_cast<std::size_t>(r)] = turn(c, sn, fan_direction(s, r));
   }
 }
 
@@ -437,11 +423,7 @@ struct ObservationModel::Impl {
       if (inside && (cells[packed_index(static_cast<unsigned>(ix), static_cast<unsigned>(iy))] & kOccupiedBit))
         return RayObservation{0.0f, entered < 0 ? 0.0f : w.time(entered), true, 0};
       entered = tn;
-      const bool bx = mx <= my, by = my <= mx;
-      ix += bx ? sx : 0;
-      iy += by ? sy : 0;
-      mx += bx ? dx : 0;
-      my += by ? dy : 0;
+      detail::CellWalk::step(ix, iy, mx, my, sx, sy, dx, dy);
     }
     w.ix = static_cast<int>(ix);
     w.iy = static_cast<int>(iy);
@@ -484,10 +466,8 @@ struct ObservationModel::Impl {
       std::int64_t t_out = end;
       if (sx != 0) t_out = std::min(t_out, leave(mx, dx, sx > 0 ? width - ix : ix + 1));
       if (sy != 0) t_out = std::min(t_out, leave(my, dy, sy > 0 ? height - iy : iy + 1));
-      const std::size_t bx = blocks_x;
       for (;;) {  // inside the grid: no bounds checks
-        const std::uint32_t wd = cells[(((static_cast<std::size_t>(iy) >> 2) * bx + (static_cast<std::size_t>(ix) >> 2)) << 4) |
-                                       ((static_cast<std::size_t>(iy) & 3u) << 2) | (static_cast<std::size_t>(ix) & 3u)];
+        const std::uint32_t wd = cells[packed_index(static_cast<unsigned>(ix), static_cast<unsigned>(iy))];
         sum += word_entropy(wd);
         ++n;
         if (wd & kOccupiedBit) {
@@ -498,22 +478,14 @@ struct ObservationModel::Impl {
         }
         const std::int64_t tn = mx < my ? mx : my;  // exit time of this cell
         if (tn >= t_out) break;
-        const bool bx_step = mx <= my, by_step = my <= mx;  // both on a tie
-        ix += bx_step ? sx : 0;
-        iy += by_step ? sy : 0;
-        mx += bx_step ? dx : 0;
-        my += by_step ? dy : 0;
+        detail::CellWalk::step(ix, iy, mx, my, sx, sy, dx, dy);  // both on a tie
       }
       if (t_out >= end) {  // the walk ended inside the grid
         r.entropy_bits = bits_of(sum);
         r.cells = n;
         return r;
       }
-      const bool bx_step = mx <= my, by_step = my <= mx;  // step out of the grid
-      ix += bx_step ? sx : 0;
-      iy += by_step ? sy : 0;
-      mx += bx_step ? dx : 0;
-      my += by_step ? dy : 0;
+      detail::CellWalk::step(ix, iy, mx, my, sx, sy, dx, dy);  // step out of the grid
     }
     for (;;) {  // outside the grid (a walk that starts outside may enter it): checked
       const bool inside = static_cast<std::uint64_t>(ix) < static_cast<std::uint64_t>(width) &&
@@ -528,11 +500,7 @@ struct ObservationModel::Impl {
       }
       const std::int64_t tn = mx < my ? mx : my;  // exit time of this cell
       if (tn >= end) break;
-      const bool bx_step = mx <= my, by_step = my <= mx;
-      ix += bx_step ? sx : 0;
-      iy += by_step ? sy : 0;
-      mx += bx_step ? dx : 0;
-      my += by_step ? dy : 0;
+      detail::CellWalk::step(ix, iy, mx, my, sx, sy, dx, dy);
     }
     r.entropy_bits = bits_of(sum);
     r.cells = n;
@@ -754,10 +722,7 @@ void ObservationModel::observe(std::span<const Pose2> poses, std::span<const Sen
   const bool dda = m.settings.backend == ObservationBackend::kDda;
   // Each sensor's fan in the robot frame, turned per pose (one sin/cos per pose, not per ray).
   std::vector<std::vector<Eigen::Vector2f>> fans(ns);
-  for (std::size_t si = 0; si < ns; ++si) {
-    fans[si].resize(static_cast<std::size_t>(sensors[si].rays));
-    for (int r = 0; r < sensors[si].rays; ++r) fans[si][static_cast<std::size_t>(r)] = fan_dir(sensors[si], r);
-  }
+  for (std::size_t si = 0; si < ns; ++si) fans[si] = detail::fan_directions(sensors[si]);
   // One task item = one sensor's fan at one pose; per-ray outputs, so any partition gives the same.
   detail::for_each_index(poses.size() * ns, 1, [&](std::size_t job) {
     const std::size_t p = job / ns, si = job % ns;

@@ -398,28 +398,16 @@ class RayWalker {
   bool done_ = true, observing_ = false;
 };
 
-// Each sensor's ray directions in the robot frame (the fan of sector_rays() at theta = 0); a
-// pose's rays are these rotated by its heading: one sin/cos per fan instead of one per ray.
-struct RobotFan {
-  std::vector<Eigen::Vector2f> dirs;
-};
-
-std::vector<RobotFan> robot_fans(std::span<const SensorSector> sensors) {
-  std::vector<RobotFan> fans(sensors.size());
-  for (std::size_t i = 0; i < sensors.size(); ++i) {
-    const SensorSector& s = sensors[i];
-    fans[i].dirs.resize(static_cast<std::size_t>(s.rays));
-    for (int r = 0; r < s.rays; ++r) {
-      const float a = s.rays > 1 ? s.yaw_rad - 0.5f * s.fov_rad + s.fov_rad * static_cast<float>(r) / static_cast<float>(s.rays - 1)
-                                 : s.yaw_rad;
-      fans[i].dirs[static_cast<std::size_t>(r)] = Eigen::Vector2f(std::cos(a), std::sin(a));
-    }
-  }
+// Each sensor's ray directions in the robot frame (detail::fan_directions, the fan of
+// sector_rays() at theta = 0); a pose's rays are these turned by its heading.
+std::vector<std::vector<Eigen::Vector2f>> robot_fans(std::span<const SensorSector> sensors) {
+  std::vector<std::vector<Eigen::Vector2f>> fans(sensors.size());
+  for (std::size_t i = 0; i < sensors.size(); ++i) fans[i] = detail::fan_directions(sensors[i]);
   return fans;
 }
 
 void precompute_rays(const GridView& grid, std::span<const std::uint8_t> codes, const SkipBlocks& sb, std::span<const Pose2> x,
-                     std::span<const SensorSector> sensors, std::span<const RobotFan> fans, ThreadScratch& ts) {
+                     std::span<const SensorSector> sensors, std::span<const std::vector<Eigen::Vector2f>> fans, ThreadScratch& ts) {
   ts.cells.clear();
   ts.ray_end.clear();
   RayWalker a(grid, codes, sb), b(grid, codes, sb);
@@ -429,11 +417,8 @@ void precompute_rays(const GridView& grid, std::span<const std::uint8_t> codes, 
       const SensorSector& sec = sensors[si];
       const auto nr = static_cast<std::size_t>(sec.rays);
       ts.dirs.resize(nr);
-      const Eigen::Vector2f org(pose.x + c * sec.x_m - sn * sec.y_m, pose.y + sn * sec.x_m + c * sec.y_m);
-      for (std::size_t r = 0; r < nr; ++r) {
-        const Eigen::Vector2f& f = fans[si].dirs[r];
-        ts.dirs[r] = Eigen::Vector2f(c * f.x() - sn * f.y(), sn * f.x() + c * f.y());
-      }
+      const Eigen::Vector2f org = detail::fan_origin(pose, sec, c, sn);
+      for (std::size_t r = 0; r < nr; ++r) ts.dirs[r] = detail::turn(c, sn, fans[si][r]);
       const std::size_t cap = RayWalker::max_cells(sec.max_range_m, grid.resolution_m);
       if (ts.pair_buffer.size() < 2 * cap) ts.pair_buffer.resize(2 * cap);
       for (std::size_t r = 0; r < nr; r += 2) {
@@ -581,7 +566,7 @@ PartialSimResult partial_map_simulation(const ObservationModel& model, const Inf
   auto& ws = workspace.impl();
   build_codes(model, s.min_logodds, ws.codes);
   build_skip_blocks(grid, ws.codes, ws.skip);
-  const std::vector<RobotFan> fans = robot_fans(sensors);
+  const std::vector<std::vector<Eigen::Vector2f>> fans = robot_fans(sensors);
   const int N = s.particles, H = s.stages;
   const auto Nz = static_cast<std::size_t>(N), Hz = static_cast<std::size_t>(H);
   ws.particles.resize(Nz);

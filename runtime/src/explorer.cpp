@@ -71,7 +71,6 @@ void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double 
     model_geometry_valid_ = true;
   }
   inflate(view, profile_.exploration.inflation, inflated_);
-  map_ = grid;
   if (relaxed_active_) build_relaxed();
   // The dynamic window's grid: unknown is an obstacle, except where the robot's body has been.
   local_grid_ = grid;
@@ -120,11 +119,11 @@ void Explorer::build_relaxed() {
   InflationSettings relaxed = profile_.exploration.inflation;
   relaxed.uncertain_is_obstacle = false;
   relaxed.robot_radius_m = relaxed_radius();
-  inflate(GridView(map_), relaxed, relaxed_);
+  inflate(model_.grid(), relaxed, relaxed_);  // the model holds the latest map's log-odds
 }
 
 bool Explorer::try_relaxed(const Pose2& robot, double now_s) {
-  if (map_.width() == 0 || !decision_.frontier_searched) return false;
+  if (!have_map_ || !decision_.frontier_searched) return false;
   if (decision_.status != ExplorationStatus::kAllUnreachable && decision_.status != ExplorationStatus::kRobotBlocked &&
       decision_.status != ExplorationStatus::kAllBlacklisted)
     return false;
@@ -137,15 +136,7 @@ bool Explorer::try_relaxed(const Pose2& robot, double now_s) {
   FrontierResult f = find_frontier(relaxed_, Eigen::Vector2f(robot.x, robot.y), blacklist_, now_s, s.frontier, ws_.frontier);
   if (f.status != FrontierStatus::kFound) return false;
   decision_.status = ExplorationStatus::kFrontierGoal;
-  decision_.goal = Pose2{f.goal_xy.x(), f.goal_xy.y(), 0.0f};
-  const Eigen::Vector2f look = f.target_xy - f.goal_xy;  // as decide_goal: face the target or the last step
-  if (look.squaredNorm() > 0.0f) decision_.goal.theta = std::atan2(look.y(), look.x());
-  else if (f.path.size() >= 2) {
-    const Eigen::Vector2f d = f.path.back() - f.path[f.path.size() - 2];
-    decision_.goal.theta = std::atan2(d.y(), d.x());
-  } else {
-    decision_.goal.theta = std::atan2(f.goal_xy.y() - robot.y, f.goal_xy.x() - robot.x);
-  }
+  decision_.goal = frontier_goal_pose(f, robot);
   decision_.frontier = std::move(f);
   decision_.frontier_searched = true;
   relaxed_active_ = true;

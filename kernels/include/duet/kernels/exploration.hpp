@@ -67,9 +67,13 @@ struct ExplorationWorkspace {
   FrontierWorkspace frontier;
 };
 
+/// The goal pose of a found frontier search (status kFound): at goal_xy, facing target_xy for an
+/// approach cell, else along the last segment of the path (towards the unknown side), else (a
+/// one-cell path) away from the robot.
+[[nodiscard]] Pose2 frontier_goal_pose(const FrontierResult& f, const Pose2& robot);
+
 /// One decision (Fig. 6). `model` and `inflated` describe the same grid; `now_s` is the caller's
-/// clock for the blacklist's expiry. A frontier goal's heading points along the last segment of
-/// the path to it (towards the unknown side).
+/// clock for the blacklist's expiry. A frontier goal's pose is frontier_goal_pose().
 ExplorationDecision decide_goal(const ObservationModel& model, const InflatedGrid& inflated, const Pose2& robot,
                                 std::span<const SensorSector> sensors, const GoalBlacklist& blacklist,
                                 double now_s, const ExplorationSettings& settings, ExplorationWorkspace& workspace);

@@ -158,7 +158,10 @@ struct CellWalk {
   /// Branch-free step (which axis comes next is a coin flip for the branch predictor); on an
   /// exact tie (the ray goes through a cell corner) both axes step: the two side cells are only
   /// touched. An axis with no motion has its time at the cap > t1, so it never steps.
-  void step() noexcept {
+  void step() noexcept { step(ix, iy, mx, my, sx, sy, dx, dy); }
+  /// The same step on a walk state the caller keeps in locals (hot loops: registers, no spills).
+  template <class I, class S>
+  static void step(I& ix, I& iy, std::int64_t& mx, std::int64_t& my, S sx, S sy, std::int64_t dx, std::int64_t dy) noexcept {
     const bool bx = mx <= my, by = my <= mx;
     ix += bx ? sx : 0;
     iy += by ? sy : 0;
@@ -166,6 +169,28 @@ struct CellWalk {
     my += by ? dy : 0;
   }
 };
+
+/// The pieces of sector_rays(), shared by the observation model and Procedure 1 so that both
+/// trace exactly the same rays. A fan's directions are computed once in the robot frame
+/// (fan_directions) and turned per pose (turn: one sin/cos per pose, not per ray).
+inline Eigen::Vector2f fan_direction(const SensorSector& s, int r) noexcept {
+  const float a = s.rays > 1 ? s.yaw_rad - 0.5f * s.fov_rad + s.fov_rad * static_cast<float>(r) / static_cast<float>(s.rays - 1)
+                             : s.yaw_rad;
+  return Eigen::Vector2f(std::cos(a), std::sin(a));
+}
+inline std::vector<Eigen::Vector2f> fan_directions(const SensorSector& s) {
+  std::vector<Eigen::Vector2f> dirs(static_cast<std::size_t>(s.rays));
+  for (int r = 0; r < s.rays; ++r) dirs[static_cast<std::size_t>(r)] = fan_direction(s, r);
+  return dirs;
+}
+/// The sensor's origin at a pose whose heading has cosine c and sine sn.
+inline Eigen::Vector2f fan_origin(const Pose2& pose, const SensorSector& s, float c, float sn) noexcept {
+  return Eigen::Vector2f(pose.x + c * s.x_m - sn * s.y_m, pose.y + sn * s.x_m + c * s.y_m);
+}
+/// A robot-frame direction turned by a heading of cosine c and sine sn.
+inline Eigen::Vector2f turn(float c, float sn, const Eigen::Vector2f& f) noexcept {
+  return Eigen::Vector2f(c * f.x() - sn * f.y(), sn * f.x() + c * f.y());
+}
 
 }  // namespace detail
 

@@ -189,7 +189,6 @@ class Explorer {
   /// near, robot blocked) from a small area (boxed_in_area_m2): the search again on the relaxed grid; true (and decision_ set
   /// to its frontier goal, relaxed_active_) if it found one.
   bool try_relaxed(const Pose2& robot, double now_s);
-  OccupancyGrid map_{0.05f};  ///< the latest map (for the relaxed grid)
 
   Profile profile_;
   ExplorerSettings settings_;
