@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
   duet::bench::register_path();
   duet::bench::register_dwa();
   duet::bench::register_render();
+  duet::bench::register_scan_match();
 #ifdef DUET_HAVE_PCL
   benchmark::AddCustomContext("duet_pcl", "PCL peers enabled");
 #else

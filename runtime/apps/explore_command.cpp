@@ -37,6 +37,7 @@ struct ExploreOptions {
   int threads = 0;
   bool realtime = false;
   bool true_pose = false;
+  bool raw_odometry = false;
   bool quiet = false;
 };
 
@@ -98,13 +99,21 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                 {"dwa_local_fallbacks", e.local_fallbacks},
                 {"escapes", e.escapes},
                 {"goals_moved", e.goals_moved},
-                {"relaxed_goals", e.relaxed_goals}};
+                {"relaxed_goals", e.relaxed_goals},
+                {"boxed_in_goals", e.boxed_in_goals}};
   j["frames_rendered"] = s.frames_rendered;
   j["sets_integrated"] = s.sets_integrated;
   j["sets_not_integrated"] = s.sets_not_integrated;
   j["frame_drops"] = s.frame_drops;
   j["odometry_unmatched"] = s.odometry_unmatched;
   j["odometry_error_end_m"] = s.odometry_error_m;
+  j["pose"] = {{"source", s.scan_matches + s.scan_match_rejected > 0 ? "odometry + scan matching" : "odometry"},
+               {"error_end_m", s.pose_error_m},
+               {"error_max_m", s.pose_error_max_m},
+               {"heading_error_end_deg", s.heading_error_deg},
+               {"scan_matches", s.scan_matches},
+               {"scan_match_rejected", s.scan_match_rejected},
+               {"scan_match_time_s", s.scan_match_time_s}};
   return j;
 }
 
@@ -231,6 +240,7 @@ int run_explore(const ExploreOptions& o) {
   sim::ExploreSettings es = make_settings(profile, o.seed, o.max_time, rate);
   es.realtime = o.realtime;
   es.use_true_pose = o.true_pose;
+  es.pose_correction.enabled = !o.raw_odometry;
   const bool tty = stderr_is_tty() && !o.quiet;
   tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
   arena.execute([&] {
@@ -350,6 +360,7 @@ void add_explore_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_flag("--realtime", o->realtime, "pace the simulation by the wall clock");
   cmd->add_flag("--true-pose", o->true_pose, "DEBUGGING: map with the true pose instead of the wheel odometry");
+  cmd->add_flag("--raw-odometry", o->raw_odometry, "pose = the raw wheel odometry (no scan-to-map correction)");
   cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
   cmd->callback([o, &exit_code] { exit_code = run_explore(*o); });

@@ -3,7 +3,10 @@
 #include <duet/kernels/error.hpp>
 #include <duet/runtime/exploration_runtime.hpp>
 
+#include <numbers>
+
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <string>
 
@@ -22,7 +25,30 @@ ApproximateTimeSettings sync_settings(const Profile& profile, const RuntimeSetti
   return a;
 }
 
+/// a o b (b expressed in a's frame).
+Pose2 compose(const Pose2& a, const Pose2& b) {
+  const float c = std::cos(a.theta), s = std::sin(a.theta);
+  return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, std::remainder(a.theta + b.theta, 2.0f * std::numbers::pi_v<float>)};
+}
+
+Pose2 inverse(const Pose2& a) {
+  const float c = std::cos(a.theta), s = std::sin(a.theta);
+  return {-(c * a.x + s * a.y), -(-s * a.x + c * a.y), -a.theta};
+}
+
 }  // namespace
+
+void validate(const PoseCorrectionSettings& s) {
+  validate(s.match);
+  auto bad = [](const std::string& what) { fail(ErrorCode::kInvalidArgument, "PoseCorrectionSettings::" + what); };
+  if (!(std::isfinite(s.min_height_m) && std::isfinite(s.max_height_m) && s.min_height_m < s.max_height_m))
+    bad("min_height_m < max_height_m (finite) required, got " + std::to_string(s.min_height_m) + ", " + std::to_string(s.max_height_m));
+  if (s.pixel_step < 1 || s.pixel_step > 64) bad("pixel_step must be in [1, 64], got " + std::to_string(s.pixel_step));
+  if (s.max_points < 1) bad("max_points must be >= 1");
+  if (!(std::isfinite(s.gain) && s.gain > 0.0f && s.gain <= 1.0f)) bad("gain must be in (0, 1], got " + std::to_string(s.gain));
+  if (!(std::isfinite(s.rate_gain) && s.rate_gain >= 0.0f && s.rate_gain <= 1.0f))
+    bad("rate_gain must be in [0, 1], got " + std::to_string(s.rate_gain));
+}
 
 void validate(const RuntimeSettings& s) {
   auto bad = [](const std::string& what) { fail(ErrorCode::kInvalidArgument, "RuntimeSettings::" + what); };
@@ -34,6 +60,7 @@ void validate(const RuntimeSettings& s) {
     bad("sensor_rate_hz must be in (0, 1000] Hz, got " + std::to_string(s.sensor_rate_hz));
   validate(s.explorer);
   validate(s.sync);
+  validate(s.pose_correction);
 }
 
 ExplorationRuntime::ExplorationRuntime(const Profile& profile, ChassisInterface& chassis,
@@ -71,9 +98,23 @@ void ExplorationRuntime::integrate(const ApproximateTimeCore::Set& set, double n
     frames.reserve(n);
     for (std::size_t i = 0; i < n; ++i)
       frames.push_back(frame_view(images[i], profile_.sensors[i], profile_.sensors[i].T_robot_optical()));
-    // The mapper gets the pose at the frames' time: the synchronized odometry (or, for
-    // debugging, the overriding pose).
-    const Pose2 at = pose_override_ ? *pose_override_ : odom.pose;
+    // The mapper gets the pose at the frames' time: the odometry interpolated to the frames'
+    // mean stamp (the synchronized message may be up to half an odometry period away: 0.6 deg
+    // of heading at 1 rad/s), corrected by scan matching (or, for debugging, the overriding pose).
+    double t_frames = 0.0;
+    for (std::size_t i = 0; i < n; ++i) t_frames += set.stamps_s[i];
+    t_frames /= static_cast<double>(n);
+    const Pose2 odom_at = odometry_at(t_frames, odom);
+    Pose2 at;
+    if (pose_override_) {
+      at = *pose_override_;
+    } else {
+      at = compose(correction_, odom_at);
+      if (settings_.pose_correction.enabled) {
+        at = correct(frames, odom_at, at, t_frames);
+        pose_ = compose(correction_, odom_pose_);
+      }
+    }
     mapper_.integrate(frames, to_isometry(at));
     explorer_.update_map(mapper_.grid(), pose_, now_s);
     ++stats_.sets_integrated;
@@ -84,12 +125,89 @@ void ExplorationRuntime::integrate(const ApproximateTimeCore::Set& set, double n
   for (std::size_t i = 0; i < n; ++i) sensors_[i]->recycle(std::move(images[i]));
 }
 
+Pose2 ExplorationRuntime::odometry_at(double t, const OdometryMsg& fallback) const {
+  // The two messages around t in the recent history (stamps increasing); else the fallback.
+  for (std::size_t k = 1; k < odom_history_.size(); ++k) {
+    const OdometryMsg& a = odom_history_[k - 1];
+    const OdometryMsg& b = odom_history_[k];
+    if (!(a.stamp_s <= t && t <= b.stamp_s)) continue;
+    const double span = b.stamp_s - a.stamp_s;
+    const float u = span > 0.0 ? static_cast<float>((t - a.stamp_s) / span) : 0.0f;
+    const float dth = std::remainder(b.pose.theta - a.pose.theta, 2.0f * std::numbers::pi_v<float>);
+    return {a.pose.x + u * (b.pose.x - a.pose.x), a.pose.y + u * (b.pose.y - a.pose.y),
+            std::remainder(a.pose.theta + u * dth, 2.0f * std::numbers::pi_v<float>)};
+  }
+  return fallback.pose;
+}
+
+Pose2 ExplorationRuntime::correct(std::span<const SensorFrame> frames, const Pose2& odom, Pose2 prior, double t) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const PoseCorrectionSettings& pc = settings_.pose_correction;
+  constexpr float kTwoPi = 2.0f * std::numbers::pi_v<float>;
+  // Predict: the heading drifts at the estimated rate since the last update.
+  const double dt = last_match_t_ >= 0.0 ? std::max(0.0, t - last_match_t_) : 0.0;
+  last_match_t_ = t;
+  prior.theta = std::remainder(prior.theta + heading_rate_ * static_cast<float>(dt), kTwoPi);
+  const OccupancyGrid& grid = mapper_.grid();
+  // Obstacle points of the frames in the robot frame, one per grid cell (the first in pixel
+  // order), heights relative to the floor of the map frame.
+  BackProjectionSettings bp = profile_.mapping.back_projection;
+  bp.pixel_step = pc.pixel_step;
+  back_project(frames, bp, scan_cloud_);
+  const float floor_z = profile_.mapping.segmentation.floor_z_m;
+  const float res = grid.resolution();
+  scan_keys_.clear();
+  for (std::size_t i = 0; i < scan_cloud_.size(); ++i) {
+    const Eigen::Vector3f& p = scan_cloud_.points[i];
+    const float h = p.z() - floor_z;
+    if (!(h >= pc.min_height_m && h <= pc.max_height_m)) continue;
+    const auto cx = static_cast<std::int64_t>(std::floor(p.x() / res)), cy = static_cast<std::int64_t>(std::floor(p.y() / res));
+    const std::uint64_t key = (static_cast<std::uint64_t>(cx + (1 << 30)) << 32) | static_cast<std::uint64_t>(cy + (1 << 30));
+    scan_keys_.emplace_back(key, static_cast<std::uint32_t>(i));
+  }
+  std::sort(scan_keys_.begin(), scan_keys_.end());
+  scan_keys_.erase(std::unique(scan_keys_.begin(), scan_keys_.end(), [](const auto& a, const auto& b) { return a.first == b.first; }),
+                   scan_keys_.end());
+  const std::size_t stride = (scan_keys_.size() + pc.max_points - 1) / pc.max_points;
+  scan_points_.clear();
+  for (std::size_t k = 0; k < scan_keys_.size(); k += std::max<std::size_t>(stride, 1)) {
+    const Eigen::Vector3f& p = scan_cloud_.points[scan_keys_[k].second];
+    scan_points_.emplace_back(p.x(), p.y());
+  }
+  Pose2 at = prior;
+  bool accepted = false;
+  if (grid.width() > 0 && grid.height() > 0 && scan_points_.size() >= pc.match.min_points) {
+    InflationSettings field;
+    field.robot_radius_m = 0.0f;
+    field.unknown_is_obstacle = false;
+    field.uncertain_is_obstacle = false;
+    field.thresholds = profile_.exploration.cells;
+    inflate(GridView(grid), field, distance_);
+    const ScanMatchResult r = scan_match(distance_.clearance(), scan_points_, prior, pc.match);
+    if (r.status == ScanMatchStatus::kMatched) {
+      const float g = pc.gain;
+      const float e_theta = std::remainder(r.pose.theta - prior.theta, kTwoPi);
+      at = Pose2{prior.x + g * (r.pose.x - prior.x), prior.y + g * (r.pose.y - prior.y), std::remainder(prior.theta + g * e_theta, kTwoPi)};
+      if (dt > 0.0) heading_rate_ += pc.rate_gain * e_theta / static_cast<float>(dt);
+      correction_ = compose(at, inverse(odom));
+      accepted = true;
+    }
+  }
+  if (!accepted) correction_ = compose(prior, inverse(odom));  // the predicted drift still applies
+  ++(accepted ? stats_.scan_matches : stats_.scan_match_rejected);
+  stats_.scan_match_time_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return at;
+}
+
 void ExplorationRuntime::tick(double now_s) {
   const std::size_t n = sensors_.size();
   // 1. Odometry (pose at up to the odometry rate) and frames into the synchronizer.
   for (OdometryMsg& m : chassis_.take_odometry()) {
     ++stats_.odometry_received;
-    pose_ = m.pose;
+    odom_pose_ = m.pose;
+    pose_ = compose(correction_, m.pose);
+    if (odom_history_.empty() || m.stamp_s > odom_history_.back().stamp_s) odom_history_.push_back(m);
+    while (odom_history_.size() > kOdomHistory) odom_history_.pop_front();
     odom_twist_ = m.twist;
     const std::uint64_t id = next_id_++;
     const double stamp = m.stamp_s;

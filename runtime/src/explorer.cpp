@@ -47,6 +47,8 @@ void validate(const ExplorerSettings& s) {
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::goal_standoff_search_m must be in [0, 5] m, got " + std::to_string(s.goal_standoff_search_m));
   if (!(s.boxed_in_area_m2 >= 0.0f && std::isfinite(s.boxed_in_area_m2)))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::boxed_in_area_m2 must be in [0, inf) m^2, got " + std::to_string(s.boxed_in_area_m2));
+  if (!(s.squeeze_min_unknown_m2 >= 0.0f && std::isfinite(s.squeeze_min_unknown_m2)))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::squeeze_min_unknown_m2 must be in [0, inf) m^2, got " + std::to_string(s.squeeze_min_unknown_m2));
   if (!(s.squeeze_margin_m >= 0.0f && s.squeeze_margin_m <= 1.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::squeeze_margin_m must be in [0, 1] m, got " + std::to_string(s.squeeze_margin_m));
   if (s.final_retries < 0 || s.final_retries > 1000)
@@ -117,7 +119,7 @@ void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double 
 
 void Explorer::build_relaxed() {
   InflationSettings relaxed = profile_.exploration.inflation;
-  relaxed.uncertain_is_obstacle = false;
+  if (relaxed_boxed_in_) relaxed.uncertain_is_obstacle = false;
   relaxed.robot_radius_m = relaxed_radius();
   inflate(model_.grid(), relaxed, relaxed_);  // the model holds the latest map's log-odds
 }
@@ -127,20 +129,36 @@ bool Explorer::try_relaxed(const Pose2& robot, double now_s) {
   if (decision_.status != ExplorationStatus::kAllUnreachable && decision_.status != ExplorationStatus::kRobotBlocked &&
       decision_.status != ExplorationStatus::kAllBlacklisted)
     return false;
-  // Only when boxed in: the search reached a small area from the robot (none if it is blocked).
+  // Boxed in: the search reached a small area from the robot (none if it is blocked).
   const double cell_m2 = static_cast<double>(inflated_.resolution_m) * static_cast<double>(inflated_.resolution_m);
-  if (!(static_cast<double>(decision_.frontier.reached_cells) * cell_m2 < static_cast<double>(settings_.boxed_in_area_m2)))
-    return false;
-  build_relaxed();
+  const bool boxed_in = static_cast<double>(decision_.frontier.reached_cells) * cell_m2 < static_cast<double>(settings_.boxed_in_area_m2);
   const ExplorationSettings& s = profile_.exploration.strategy;
-  FrontierResult f = find_frontier(relaxed_, Eigen::Vector2f(robot.x, robot.y), blacklist_, now_s, s.frontier, ws_.frontier);
-  if (f.status != FrontierStatus::kFound) return false;
+  FrontierResult f;
+  bool found = false;
+  // First the squeezed radius alone, then (boxed in) with uncertain cells not blocking as well.
+  for (const bool level_boxed : {false, true}) {
+    if (level_boxed ? !boxed_in : !(settings_.squeeze_anywhere || boxed_in)) continue;
+    if (!level_boxed && !(relaxed_radius() < profile_.exploration.inflation.robot_radius_m)) continue;  // same grid
+    relaxed_boxed_in_ = level_boxed;
+    build_relaxed();
+    // From a large area only frontiers of large unknown regions (a room behind a door), not
+    // the pockets between furniture and clutter the robot would squeeze into.
+    FrontierSettings fs = s.frontier;
+    if (!boxed_in) fs.min_unknown_region_m2 = std::max(fs.min_unknown_region_m2, settings_.squeeze_min_unknown_m2);
+    f = find_frontier(relaxed_, Eigen::Vector2f(robot.x, robot.y), blacklist_, now_s, fs, ws_.frontier);
+    if (f.status == FrontierStatus::kFound) {
+      found = true;
+      break;
+    }
+  }
+  if (!found) return false;
   decision_.status = ExplorationStatus::kFrontierGoal;
   decision_.goal = frontier_goal_pose(f, robot);
   decision_.frontier = std::move(f);
   decision_.frontier_searched = true;
   relaxed_active_ = true;
   ++stats_.relaxed_goals;
+  stats_.boxed_in_goals += relaxed_boxed_in_;
   return true;
 }
 

@@ -42,6 +42,7 @@ RuntimeSettings runtime_settings(const ExploreSettings& s) {
   r.sensor_rate_hz = sensor_rate(s);
   r.explorer = s.explorer;
   r.sync = s.sync;
+  r.pose_correction = s.pose_correction;
   return r;
 }
 
@@ -75,6 +76,7 @@ void validate(const ExploreSettings& s) {
   validate(s.explorer);
   validate(s.render);
   validate(s.sync);
+  validate(s.pose_correction);
 }
 
 SimRgbdSensor::SimRgbdSensor(const RgbdRenderer& renderer, const SimChassis& chassis, SensorProfile sensor, double rate_hz,
@@ -191,6 +193,7 @@ bool SimExplore::step() {
   path_length_ += std::hypot(truth.x - last.x, truth.y - last.y);
   true_traj_.push_back({t_, truth});
   est_traj_.push_back({t_, runtime_->pose()});
+  pose_error_max_ = std::max(pose_error_max_, static_cast<double>(std::hypot(runtime_->pose().x - truth.x, runtime_->pose().y - truth.y)));
   if (target_entered_ < 0.0 && world_->target_region && world_->target_region->contains({truth.x, truth.y}))
     target_entered_ = t_;
   if (t_ + 1e-9 >= next_curve_t_) {
@@ -250,6 +253,13 @@ ExploreSummary SimExplore::summary() const {
   s.odometry_unmatched = rs.odometry_unmatched;
   const Pose2 tp = chassis_.true_pose();
   s.odometry_error_m = std::hypot(chassis_.odometry_pose().x - tp.x, chassis_.odometry_pose().y - tp.y);
+  const Pose2 est = runtime_->pose();
+  s.pose_error_m = std::hypot(est.x - tp.x, est.y - tp.y);
+  s.pose_error_max_m = pose_error_max_;
+  s.heading_error_deg = std::fabs(std::remainder(est.theta - tp.theta, 2.0 * 3.14159265358979323846)) * 180.0 / 3.14159265358979323846;
+  s.scan_matches = rs.scan_matches;
+  s.scan_match_rejected = rs.scan_match_rejected;
+  s.scan_match_time_s = rs.scan_match_time_s;
   return s;
 }
 

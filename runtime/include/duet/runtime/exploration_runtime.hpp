@@ -10,25 +10,53 @@
 ///     at the pose of its odometry message and the explorer gets the new grid (map and grid at
 ///     map_rate_hz, paper §4.2: 1 Hz); sets between map times are counted as not integrated
 ///     (they are for visual odometry, not built yet);
-///  3. pose: the latest wheel odometry (paper §4.2: up to 20 Hz) - or, for debugging only, a
-///     pose the caller overrides;
+///  3. pose: the latest wheel odometry (paper §4.2: up to 20 Hz), corrected by scan-to-map
+///     matching at every map update (PoseCorrectionSettings: the obstacle points of the new
+///     frames are matched against the grid before it integrates them, and the correction
+///     map <- odometry then applies to every odometry pose until the next update) - or, for
+///     debugging only, a pose the caller overrides;
 ///  4. control: the explorer's decision / dynamic window command goes to the chassis.
-/// Until visual odometry exists the map frame is the odometry frame.
+/// Until visual odometry exists the map frame is the odometry frame corrected by the matcher
+/// (with the correction off: the odometry frame itself).
 ///
 /// Thread safety: one thread calls tick(); the kernels run TBB-parallel in the caller's task
 /// arena and the results do not depend on the thread count.
+#include <duet/kernels/inflation.hpp>
+#include <duet/kernels/scan_match.hpp>
 #include <duet/runtime/explorer.hpp>
 #include <duet/runtime/mapper.hpp>
 #include <duet/runtime/profile.hpp>
 #include <duet/runtime/robot_io.hpp>
 #include <duet/runtime/synchronizer.hpp>
 
+#include <deque>
 #include <optional>
 #include <span>
 #include <unordered_map>
 #include <vector>
 
 namespace duet {
+
+/// Scan-to-map correction of the wheel odometry (scan_match.hpp), once per map update.
+struct PoseCorrectionSettings {
+  bool enabled = true;          ///< false: the pose is the raw wheel odometry
+  ScanMatchSettings match;      ///< the matcher (window, steps, field, prior, acceptance)
+  /// Fraction of an accepted match's offset from the prior that is applied, (0, 1]. One match
+  /// is good to ~0.4 deg / 3 cm (lab, 1 Hz frames, 0.05 m cells) while the gyro drifts
+  /// 0.005 deg/s: a small gain averages the matches over ~1/gain updates and still tracks the
+  /// drift (a complementary filter of odometry and matcher).
+  float gain = 0.1f;
+  /// Gain of the heading-rate estimate, [0, 1]: the matches' heading offsets divided by the time
+  /// between updates feed a rate (a gyro's bias) that predicts the correction's heading at the
+  /// next update (an alpha-beta filter with alpha = gain), so a constant bias leaves no steady
+  /// lag. 0 = no rate.
+  float rate_gain = 0.01f;
+  float min_height_m = 0.15f;   ///< obstacle points from this height above the floor [m] (above the floor's noise)
+  float max_height_m = 1.20f;   ///< ... up to this height [m] (the segmentation's obstacle band)
+  int pixel_step = 4;           ///< every n-th pixel in u and v of each frame, [1, 64]
+  std::size_t max_points = 2000;  ///< at most this many points (one per grid cell, then every k-th), >= 1
+};
+void validate(const PoseCorrectionSettings& s);
 
 struct RuntimeSettings {
   double control_rate_hz = 20.0;   ///< control and pose rate [Hz] (paper §4.2), (0, 1000]
@@ -38,6 +66,7 @@ struct RuntimeSettings {
   double sensor_rate_hz = 30.0;
   ExplorerSettings explorer;
   ApproximateTimeSettings sync;    ///< queue_size raised to hold two sensor periods of odometry
+  PoseCorrectionSettings pose_correction;
 };
 void validate(const RuntimeSettings& s);
 
@@ -48,6 +77,9 @@ struct RuntimeStats {
   std::uint64_t frame_drops = 0;         ///< frames the synchronizer dropped (all sensors)
   std::uint64_t odometry_received = 0;
   std::uint64_t odometry_unmatched = 0;  ///< odometry in no set (50 Hz odometry vs the frame rate: expected)
+  std::size_t scan_matches = 0;          ///< map updates whose scan match was accepted (the correction moved)
+  std::size_t scan_match_rejected = 0;   ///< ... not accepted (too few points, not confident): correction kept
+  double scan_match_time_s = 0.0;        ///< wall time in the correction (points, field, match) [s]
 };
 
 class ExplorationRuntime {
@@ -64,7 +96,12 @@ class ExplorationRuntime {
   /// DEBUGGING ONLY: map and plan with this pose instead of the odometry (nullopt: odometry).
   void override_pose(const std::optional<Pose2>& pose) { pose_override_ = pose; }
 
+  /// The pose estimate: correction() applied to the latest odometry (or the override).
   [[nodiscard]] const Pose2& pose() const noexcept { return pose_; }
+  /// The scan matcher's correction map <- odometry frame (identity until a match is accepted).
+  [[nodiscard]] const Pose2& correction() const noexcept { return correction_; }
+  /// The estimated drift rate of the odometry's heading [rad/s] (see PoseCorrectionSettings::rate_gain).
+  [[nodiscard]] float heading_rate() const noexcept { return heading_rate_; }
   [[nodiscard]] const Twist& last_command() const noexcept { return last_cmd_; }
   [[nodiscard]] Mapper& mapper() noexcept { return mapper_; }
   [[nodiscard]] const Mapper& mapper() const noexcept { return mapper_; }
@@ -75,6 +112,12 @@ class ExplorationRuntime {
 
  private:
   void integrate(const ApproximateTimeCore::Set& set, double now_s);
+  /// Odometry pose at time t, interpolated between the two recent messages around it; the
+  /// fallback message's pose if t is not inside the history.
+  [[nodiscard]] Pose2 odometry_at(double t, const OdometryMsg& fallback) const;
+  /// Scan-to-map match of the frames' obstacle points around `prior`; updates correction_ from
+  /// `odom` when accepted and returns the pose to integrate at.
+  Pose2 correct(std::span<const SensorFrame> frames, const Pose2& odom, Pose2 prior, double t);
 
   Profile profile_;
   RuntimeSettings settings_;
@@ -89,6 +132,16 @@ class ExplorationRuntime {
   std::uint64_t next_id_ = 0;
   double next_map_t_ = 0.0;
   Pose2 pose_;
+  Pose2 odom_pose_;             ///< latest raw wheel odometry
+  static constexpr std::size_t kOdomHistory = 256;  ///< odometry messages kept for interpolation (5 s at 50 Hz)
+  std::deque<OdometryMsg> odom_history_;
+  Pose2 correction_;            ///< map <- odometry (scan matching)
+  float heading_rate_ = 0.0f;   ///< estimated drift of the odometry's heading [rad/s] (PoseCorrectionSettings::rate_gain)
+  double last_match_t_ = -1.0;  ///< stamp of the last correction update [s]
+  PointCloud scan_cloud_;       ///< scratch of correct()
+  std::vector<Eigen::Vector2f> scan_points_;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> scan_keys_;
+  InflatedGrid distance_;       ///< distance to the nearest occupied cell of the grid
   Twist odom_twist_;
   Twist last_cmd_;
   std::optional<Pose2> pose_override_;

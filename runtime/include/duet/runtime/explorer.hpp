@@ -74,16 +74,24 @@ struct ExplorerSettings {
   /// How far a goal may be moved off cells next to unknown space (see the goal life cycle) [m],
   /// [0, 5]; 0 = never move a goal (it is then abandoned when next to unknown cells).
   float goal_standoff_search_m = 0.75f;
-  /// When the frontier search reaches no goal, it runs again on a relaxed grid: observed-but-
-  /// uncertain cells do not block, and the robot's radius (planner and dynamic window) shrinks
-  /// to the chassis' radius + this margin if that is smaller than the profile's [m], [0, 1].
-  /// A door that new wall cells narrowed behind the robot can so still be passed (the paper's
-  /// footprint radius 0.23 m + 0.06 m leaves the Kobuki's 0.177 m body 0.11 m).
+  /// When the frontier search reaches no goal, it runs again on a relaxed grid: the robot's
+  /// radius (planner and dynamic window) shrinks to the chassis' radius + this margin if that
+  /// is smaller than the profile's [m], [0, 1]. A door whose jambs, once fully seen, narrow it
+  /// under the inflation can so still be passed (the paper's footprint radius 0.23 m + 0.06 m
+  /// leaves the Kobuki's 0.177 m body 0.11 m; Willow's doors close in the 0.29 m inflation).
   float squeeze_margin_m = 0.06f;
-  /// ... but only when the robot is boxed in: the search reached less than this area of
-  /// traversable cells from it (or none) [m^2], [0, inf); 0 = never relax. At the end of an
-  /// exploration the frontiers left are unreachable too, but from a large area: relaxing then
-  /// squeezes the robot into gaps between furniture (lab, 10 seeds: 2 collisions with, 0 without).
+  /// Shrink the radius (above) whenever the search reaches no goal, from any area; false: only
+  /// when boxed in (below). Observed-but-uncertain cells still block at this level.
+  bool squeeze_anywhere = true;
+  /// ... and then only towards frontiers of unknown regions at least this large [m^2], [0, inf)
+  /// (FrontierSettings::min_unknown_region_m2 for that search): a room behind a door, not the
+  /// pockets between clutter (Willow, true pose: a squeeze into 0.1 m pillars collided).
+  float squeeze_min_unknown_m2 = 4.0f;
+  /// When the robot is boxed in - the search reached less than this area of traversable cells
+  /// from it (or none) [m^2], [0, inf); 0 = never - observed-but-uncertain cells stop blocking
+  /// too (a door that grazing rays left uncertain). Not from large areas: at the end of an
+  /// exploration that squeezes the robot against faces seen only at grazing incidence (lab,
+  /// 10 seeds: 2 collisions with, 0 without).
   float boxed_in_area_m2 = 10.0f;
 };
 void validate(const ExplorerSettings& s);
@@ -108,9 +116,10 @@ struct ExplorerStats {
   int local_fallbacks = 0;          ///< control periods the dynamic window fell back to the global grid
   int escapes = 0;                  ///< control periods spent escaping the dynamic window's margin
   int goals_moved = 0;              ///< goals moved off cells next to unknown space (decisions and re-checks)
-  /// Frontier goals found on the relaxed grid (observed-but-uncertain cells not blocking) after
-  /// the search on the planning grid reached no frontier: the robot was boxed in by such cells.
+  /// Frontier goals found on a relaxed grid (the squeezed radius; when boxed in, observed-but-
+  /// uncertain cells not blocking either) after the search on the planning grid reached none.
   int relaxed_goals = 0;
+  int boxed_in_goals = 0;           ///< of relaxed_goals, those with uncertain cells not blocking
   double decision_time_sum_s = 0.0;
   double decision_time_max_s = 0.0;
 };
@@ -152,8 +161,8 @@ class Explorer {
   [[nodiscard]] const std::vector<Eigen::Vector2f>& path() const noexcept { return path_; }
   [[nodiscard]] const InflatedGrid& inflated() const noexcept { return inflated_; }
   /// The grid paths are planned on: inflated(), or while a relaxed goal is active the same map
-  /// inflated with observed-but-uncertain cells not blocking and the relaxed radius (see
-  /// ExplorerSettings::squeeze_margin_m, ExplorerStats::relaxed_goals).
+  /// inflated with the relaxed radius (and, when boxed in, observed-but-uncertain cells not
+  /// blocking; see ExplorerSettings::squeeze_margin_m, ExplorerStats::relaxed_goals).
   [[nodiscard]] const InflatedGrid& planning_grid() const noexcept { return relaxed_active_ ? relaxed_ : inflated_; }
   /// The dynamic window's grid: unknown cells are obstacles, the trail is free.
   [[nodiscard]] const InflatedGrid& local_grid() const noexcept { return local_; }
@@ -183,11 +192,13 @@ class Explorer {
   [[nodiscard]] std::optional<Eigen::Vector2f> standoff(const Eigen::Vector2f& target) const;
   /// Moves goal_ to standoff(goal_target_) if it is no longer such a cell; false if none.
   bool recheck_goal();
-  /// The map inflated with observed-but-uncertain cells not blocking, into relaxed_.
+  /// The map inflated with the relaxed radius (and uncertain cells not blocking if
+  /// relaxed_boxed_in_), into relaxed_.
   void build_relaxed();
   /// After a decision whose frontier search found no goal (all unreachable or blacklisted or too
-  /// near, robot blocked) from a small area (boxed_in_area_m2): the search again on the relaxed grid; true (and decision_ set
-  /// to its frontier goal, relaxed_active_) if it found one.
+  /// near, robot blocked): the search again on the relaxed grid (squeeze_anywhere,
+  /// boxed_in_area_m2); true (and decision_ set to its frontier goal, relaxed_active_) if it
+  /// found one.
   bool try_relaxed(const Pose2& robot, double now_s);
 
   Profile profile_;
@@ -197,6 +208,7 @@ class Explorer {
   InflatedGrid inflated_;
   InflatedGrid relaxed_;        ///< see planning_grid(); built only when needed
   bool relaxed_active_ = false; ///< the current goal was found on relaxed_
+  bool relaxed_boxed_in_ = false; ///< relaxed_ lets uncertain cells through (boxed in)
   InflatedGrid local_;
   OccupancyGrid local_grid_{0.05f};
   std::vector<Eigen::Vector2f> trail_;  ///< robot positions, 0.05 m apart

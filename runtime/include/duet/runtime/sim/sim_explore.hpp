@@ -14,11 +14,12 @@
 ///     i.e. only the frames the pipeline consumes), stamped with the render time, posed by the
 ///     TRUE robot pose (the world does not know about odometry drift);
 ///  3. ExplorationRuntime::tick(): synchronizer -> mapper (1 Hz) -> explorer -> command; the
-///     pose is the noisy wheel odometry - the true pose only with use_true_pose (a debugging
+///     pose is the noisy wheel odometry corrected by scan-to-map matching (pose_correction;
+///     enabled = false: the raw odometry) - the true pose only with use_true_pose (a debugging
 ///     option, never the default);
 ///  4. the run is scored: coverage, time-area curve, collisions, target region.
 /// Frames: the odometry starts at the world's start pose, so the map frame is the world frame
-/// up to odometry drift; coverage is measured by looking up the world's reachable free cells
+/// up to the pose estimate's drift; coverage is measured by looking up the world's reachable free cells
 /// in the map.
 ///
 /// Determinism: the same world, profile and seed give the same trajectory, map and summary
@@ -64,6 +65,7 @@ struct ExploreSettings {
   /// heading of a Kobuki when unset; its seed is replaced by a value derived from `seed`.
   std::optional<ChassisSimSettings> chassis;
   ApproximateTimeSettings sync;    ///< the synchronizer (queue size, max interval)
+  PoseCorrectionSettings pose_correction;  ///< scan-to-map correction of the odometry (enabled = false: raw odometry)
 };
 void validate(const ExploreSettings& s);
 
@@ -102,7 +104,13 @@ struct ExploreSummary {
   std::size_t sets_not_integrated = 0;   ///< sets between map times (no consumer yet)
   std::uint64_t frame_drops = 0;         ///< sensor frames the synchronizer dropped (all sensors)
   std::uint64_t odometry_unmatched = 0;  ///< odometry messages in no set (expected: 50 Hz vs the sensor rate)
-  double odometry_error_m = 0.0;         ///< |odometry - truth| at the end [m]
+  double odometry_error_m = 0.0;         ///< |raw wheel odometry - truth| at the end [m]
+  double pose_error_m = 0.0;             ///< |pose estimate (corrected odometry) - truth| at the end [m]
+  double pose_error_max_m = 0.0;         ///< max over the run of |pose estimate - truth| [m]
+  double heading_error_deg = 0.0;        ///< |pose estimate's heading - truth's| at the end [deg]
+  std::size_t scan_matches = 0;          ///< map updates whose scan match was accepted
+  std::size_t scan_match_rejected = 0;   ///< map updates whose scan match was not (correction kept)
+  double scan_match_time_s = 0.0;        ///< wall time in the scan-to-map correction [s]
 };
 
 /// One collision (a contact onset of the chassis).
@@ -195,6 +203,7 @@ class SimExplore {
   std::vector<CollisionRecord> collision_log_;
   std::vector<StampedPose> est_traj_, true_traj_;
   double path_length_ = 0.0;
+  double pose_error_max_ = 0.0;
   double target_entered_ = -1.0;
   double t90_ = -1.0, t_paper_ = -1.0;
   double wall_elapsed_ = 0.0;

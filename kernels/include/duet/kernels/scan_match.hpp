@@ -1,0 +1,77 @@
+#pragma once
+/// @file scan_match.hpp
+/// 2D scan-to-map matching: the planar pose (x, y, theta) near a prior at which a set of
+/// obstacle points (robot frame, projected on the floor) best lies on the map's occupied cells.
+/// It corrects the drift of wheel odometry between map updates (the pose source until visual
+/// odometry exists; DESIGN.md §1 puts odometry + EKF + loop closure there later).
+///
+/// Score of a pose T (a likelihood field, as in Thrun et al., Probabilistic Robotics §6.4):
+///   S(T) = (1/N) sum_i exp(-d(T p_i)^2 / (2 sigma^2)),
+/// d = distance from the point to the nearest occupied cell centre (the ClearanceView of
+/// inflate() with only occupied cells blocking), bilinearly interpolated between cell centres
+/// and clamped to max_distance_m; points off the grid score 0.
+/// The prior weighs each candidate (a Gaussian on the correction, as the translation and
+/// rotation weights of Cartographer's real-time correlative matcher do):
+///   W(T) = S(T) * exp(-|dt|^2 / (2 prior_sigma_m^2) - dtheta^2 / (2 prior_sigma_rad^2)),
+/// so where the scan constrains nothing (a corridor's length) the prior is kept.
+/// Search: every candidate of a regular lattice (linear_step_m, angular_step_deg) within the
+/// window (exhaustive, the correlative scan matcher of Olson 2009 without its multi-resolution
+/// bound), then the same around the best at a quarter of the steps.
+///
+/// The result is accepted (kMatched) when at least min_points points were given and the best
+/// S reaches min_score; else kNotConfident (too little structure or a bad map) or
+/// kTooFewPoints, and `pose` is the prior.
+///
+/// Determinism: ties go to the candidate with the lowest lattice index; the result does not
+/// depend on the thread count.
+/// Thread safety: reentrant; parallel inside (TBB, over angles) in the caller's task arena.
+#include <duet/kernels/grid_view.hpp>
+#include <duet/kernels/motion_model.hpp>
+
+#include <cstddef>
+#include <span>
+
+namespace duet {
+
+struct ScanMatchSettings {
+  float linear_window_m = 0.15f;     ///< search +-this in x and y around the prior [m], [0, 5]
+  float angular_window_deg = 1.5f;   ///< search +-this in heading [deg], [0, 45]
+  float linear_step_m = 0.05f;       ///< coarse lattice step in x and y [m], (0, 1]
+  float angular_step_deg = 0.5f;     ///< coarse lattice step in heading [deg], (0, 10]
+  float sigma_m = 0.05f;             ///< std of the likelihood field [m], (0, 1]
+  float max_distance_m = 0.25f;      ///< distances are clamped to this [m], (0, 10]
+  float prior_sigma_m = 0.1f;        ///< std of the translation prior [m], (0, inf)
+  float prior_sigma_deg = 2.0f;      ///< std of the heading prior [deg], (0, inf)
+  std::size_t min_points = 50;       ///< fewer points: kTooFewPoints, >= 1
+  float min_score = 0.35f;           ///< best mean score below this: kNotConfident, [0, 1]
+};
+/// Throws duet::Error(kInvalidArgument) naming the bad field.
+void validate(const ScanMatchSettings& s);
+
+enum class ScanMatchStatus {
+  kMatched = 0,       ///< pose is the best candidate
+  kTooFewPoints = 1,  ///< pose is the prior
+  kNotConfident = 2,  ///< pose is the prior (best score below min_score)
+};
+
+struct ScanMatchResult {
+  ScanMatchStatus status = ScanMatchStatus::kTooFewPoints;
+  Pose2 pose;                 ///< the matched pose, or the prior
+  float score = 0.0f;         ///< S of `pose` (mean per point, [0, 1])
+  float prior_score = 0.0f;   ///< S of the prior
+  std::size_t candidates = 0; ///< poses scored
+};
+
+/// S(T) of one pose (the definition above), for tests and diagnostics. Points with a non-finite
+/// coordinate are skipped (they count in N). 0 for no points.
+[[nodiscard]] float scan_match_score(ClearanceView distance, std::span<const Eigen::Vector2f> points_robot,
+                                     const Pose2& pose, const ScanMatchSettings& settings);
+
+/// Matches `points_robot` (robot frame [m]) against `distance` (distance to the nearest occupied
+/// cell centre, e.g. InflatedGrid::clearance() of inflate() with unknown and uncertain cells not
+/// blocking) around `prior` (map frame). Throws duet::Error(kInvalidArgument) for invalid
+/// settings, a non-finite prior, or a view whose size does not match its span.
+[[nodiscard]] ScanMatchResult scan_match(ClearanceView distance, std::span<const Eigen::Vector2f> points_robot,
+                                         const Pose2& prior, const ScanMatchSettings& settings = {});
+
+}  // namespace duet
