@@ -100,7 +100,8 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                 {"escapes", e.escapes},
                 {"goals_moved", e.goals_moved},
                 {"relaxed_goals", e.relaxed_goals},
-                {"boxed_in_goals", e.boxed_in_goals}};
+                {"boxed_in_goals", e.boxed_in_goals},
+                {"stalls", e.stalls}};
   j["frames_rendered"] = s.frames_rendered;
   j["sets_integrated"] = s.sets_integrated;
   j["sets_not_integrated"] = s.sets_not_integrated;

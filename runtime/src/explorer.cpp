@@ -41,6 +41,9 @@ void validate(const ExplorerSettings& s) {
   positive(s.goal_timeout_s, "goal_timeout_s");
   positive(s.nominal_speed_mps, "nominal_speed_mps");
   positive(s.stuck_timeout_s, "stuck_timeout_s");
+  positive(s.stall_timeout_s, "stall_timeout_s");
+  if (!(s.contact_radius_m > 0.0f && s.contact_radius_m <= 1.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::contact_radius_m must be in (0, 1] m, got " + std::to_string(s.contact_radius_m));
   if (!(s.blacklist_ttl_s > 0.0f))  // +inf allowed
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::blacklist_ttl_s must be in (0, inf], got " + std::to_string(s.blacklist_ttl_s));
   if (!(s.goal_standoff_search_m >= 0.0f && s.goal_standoff_search_m <= 5.0f))
@@ -64,6 +67,21 @@ Explorer::Explorer(const Profile& profile, const ExplorerSettings& settings)
   validate(profile_.exploration.inflation);
 }
 
+void Explorer::mark_contacts(OccupancyGrid& g) const {
+  const float occ = std::max(profile_.exploration.cells.occupied_logodds, profile_.mapping.grid_update.max_logodds);
+  const float r = settings_.contact_radius_m;
+  const int rc = static_cast<int>(std::ceil(r / g.resolution()));
+  for (const Eigen::Vector2f& p : contacts_) {
+    const Eigen::Vector2i c = g.cell_of(p);
+    for (int dy = -rc; dy <= rc; ++dy)
+      for (int dx = -rc; dx <= rc; ++dx) {
+        const int x = c.x() + dx, y = c.y() + dy;
+        if (!g.in_bounds(x, y) || (g.cell_center(x, y) - p).norm() > r) continue;
+        g.logodds()[g.index(x, y)] = occ;
+      }
+  }
+}
+
 void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double now_s) {
   const GridView view(grid);
   if (model_geometry_valid_ && same_geometry(model_.grid(), view)) {
@@ -72,10 +90,17 @@ void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double 
     model_.set_grid(view);
     model_geometry_valid_ = true;
   }
-  inflate(view, profile_.exploration.inflation, inflated_);
+  // Planning and driving see the contact obstacles too (the observation model keeps the map).
+  const OccupancyGrid* map = &grid;
+  if (!contacts_.empty()) {
+    contact_grid_ = grid;
+    mark_contacts(contact_grid_);
+    map = &contact_grid_;
+  }
+  inflate(GridView(*map), profile_.exploration.inflation, inflated_);
   if (relaxed_active_) build_relaxed();
   // The dynamic window's grid: unknown is an obstacle, except where the robot's body has been.
-  local_grid_ = grid;
+  local_grid_ = *map;
   const float free_l = std::min(profile_.exploration.cells.free_logodds, profile_.mapping.grid_update.min_logodds);
   const float res = local_grid_.resolution();
   auto clear_disc = [&](const Eigen::Vector2f& p, float r) {
@@ -98,6 +123,7 @@ void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double 
   for (const Eigen::Vector2f& p : trail_) clear_disc(p, body_cells_r);
   if (!trail_.empty())
     clear_disc(trail_.front(), profile_.exploration.dwa.robot_radius_m + profile_.exploration.dwa.safety_margin_m + res);
+  if (!contacts_.empty()) mark_contacts(local_grid_);  // over the trail: the contact is in front of it
   InflationSettings local_settings = profile_.exploration.inflation;
   local_settings.unknown_is_obstacle = true;
   inflate(GridView(local_grid_), local_settings, local_);
@@ -121,7 +147,8 @@ void Explorer::build_relaxed() {
   InflationSettings relaxed = profile_.exploration.inflation;
   if (relaxed_boxed_in_) relaxed.uncertain_is_obstacle = false;
   relaxed.robot_radius_m = relaxed_radius();
-  inflate(model_.grid(), relaxed, relaxed_);  // the model holds the latest map's log-odds
+  // The latest map (the model holds its log-odds), with the contacts if any.
+  inflate(contacts_.empty() ? model_.grid() : GridView(contact_grid_), relaxed, relaxed_);
 }
 
 bool Explorer::try_relaxed(const Pose2& robot, double now_s) {
@@ -358,6 +385,27 @@ std::optional<Twist> Explorer::escape(const Pose2& robot, const Twist& current) 
 }
 
 Twist Explorer::control(const Pose2& robot, const Twist& current, double now_s) {
+  // Stall: driving forward, the odometry measures no motion - a contact the sensors cannot see.
+  if (last_cmd_.v >= 0.03f && std::fabs(current.v) < 0.01f && std::isfinite(robot.x) && std::isfinite(robot.y)) {
+    if (stall_since_s_ < 0.0) stall_since_s_ = now_s;
+    if (now_s - stall_since_s_ >= settings_.stall_timeout_s) {
+      const float ahead = profile_.chassis.radius_m + 0.5f * settings_.contact_radius_m;
+      contacts_.emplace_back(robot.x + ahead * std::cos(robot.theta), robot.y + ahead * std::sin(robot.theta));
+      ++stats_.stalls;
+      stall_since_s_ = -1.0;
+      if (goal_) abandon(stats_.goals_abandoned_stuck, now_s);
+      wait_for_map_ = true;  // decide again once the grids hold the contact
+      last_cmd_ = Twist{};
+      return last_cmd_;
+    }
+  } else {
+    stall_since_s_ = -1.0;
+  }
+  last_cmd_ = control_step(robot, current, now_s);
+  return last_cmd_;
+}
+
+Twist Explorer::control_step(const Pose2& robot, const Twist& current, double now_s) {
   const Eigen::Vector2f here(robot.x, robot.y);
   if (here.allFinite() && (trail_.empty() || (trail_.back() - here).norm() >= 0.05f)) trail_.push_back(here);
   if (!have_map_ || state_ == ExplorerState::kDone) return Twist{};

@@ -170,9 +170,10 @@ TEST(Explorer, NarrowDoorIsPassedWithTheRelaxedRadius) {
   EXPECT_FALSE(shut.goal().has_value());
   EXPECT_EQ(shut.stats().relaxed_goals, 0);
   // Not boxed in: the robot's side of the door (~4 m^2 of traversable cells) is more than 1 m^2.
-  // The squeezed radius is still tried from there (squeeze_anywhere), uncertain cells still block.
+  // With squeeze_anywhere the squeezed radius is still tried from there, uncertain cells still block.
   duet::ExplorerSettings big;
   big.boxed_in_area_m2 = 1.0f;
+  big.squeeze_anywhere = true;
   duet::Explorer open_side(p, big);
   open_side.update_map(g, robot, 0.0);
   (void)open_side.control(robot, duet::Twist{}, 0.0);
@@ -182,7 +183,7 @@ TEST(Explorer, NarrowDoorIsPassedWithTheRelaxedRadius) {
   EXPECT_EQ(open_side.stats().boxed_in_goals, 0);
   ASSERT_FALSE(open_side.decisions().empty());
   EXPECT_GT(open_side.decisions().front().reached_cells, 400u);  // 1 m^2 at 0.05 m
-  // ... and not at all with squeeze_anywhere off: the door stays shut from a large area.
+  // ... and not at all with squeeze_anywhere off (the default): the door stays shut from a large area.
   big.squeeze_anywhere = false;
   duet::Explorer only_boxed(p, big);
   only_boxed.update_map(g, robot, 0.0);
@@ -205,6 +206,7 @@ TEST(Explorer, SqueezeOnlyTowardsLargeUnknownRegions) {
   const duet::Pose2 robot{1.0f, 1.45f, 0.0f};
   duet::ExplorerSettings large;
   large.boxed_in_area_m2 = 1.0f;  // the robot's side is "large"
+  large.squeeze_anywhere = true;
   duet::Explorer stays(p, large);
   stays.update_map(g, robot, 0.0);
   (void)stays.control(robot, duet::Twist{}, 0.0);
@@ -231,6 +233,7 @@ TEST(Explorer, UncertainCellsBlockUnlessBoxedIn) {
   const duet::Pose2 robot{1.0f, 1.45f, 0.0f};
   duet::ExplorerSettings large;
   large.boxed_in_area_m2 = 1.0f;  // the robot's side (~4 m^2) is not "boxed in"
+  large.squeeze_anywhere = true;  // even then the uncertain cells block
   duet::Explorer stays(p, large);
   stays.update_map(g, robot, 0.0);
   (void)stays.control(robot, duet::Twist{}, 0.0);
@@ -243,6 +246,43 @@ TEST(Explorer, UncertainCellsBlockUnlessBoxedIn) {
   EXPECT_GT(passes.goal()->x, 2.5f);
   EXPECT_EQ(passes.stats().relaxed_goals, 1);
   EXPECT_EQ(passes.stats().boxed_in_goals, 1);
+}
+
+// Driving forward while the odometry measures no motion (a contact the sensors cannot see): after
+// stall_timeout_s a contact obstacle goes just ahead of the robot, the goal is abandoned, and from
+// the next map update on every grid the explorer plans and drives on holds the obstacle.
+TEST(Explorer, StallPutsAContactObstacleAheadAndAbandonsTheGoal) {
+  const duet::Profile p = frontier_only_profile();
+  duet::Explorer e(p);
+  const duet::Pose2 robot{1.0f, 1.5f, 0.0f};
+  const duet::OccupancyGrid g = half_known_room();
+  e.update_map(g, robot, 0.0);
+  // Moving: no stall however long.
+  double t = 0.0;
+  duet::Twist cmd = e.control(robot, duet::Twist{}, t);
+  ASSERT_TRUE(e.goal().has_value());
+  for (int i = 0; i < 40; ++i) cmd = e.control(robot, duet::Twist{0.2f, 0.0f}, t += 0.05);
+  EXPECT_EQ(e.stats().stalls, 0);
+  ASSERT_GE(cmd.v, 0.03f);  // it drives forward, towards the frontier at x = 4 m
+  // Stalled: commanded forward, measured still, for more than 1 s.
+  for (int i = 0; i < 25 && e.stats().stalls == 0; ++i) cmd = e.control(robot, duet::Twist{}, t += 0.05);
+  EXPECT_EQ(e.stats().stalls, 1);
+  EXPECT_GE(t, 1.0);
+  EXPECT_EQ(cmd.v, 0.0f);
+  EXPECT_FALSE(e.goal().has_value());
+  ASSERT_EQ(e.contacts().size(), 1u);
+  const Eigen::Vector2f c = e.contacts().front();
+  EXPECT_NEAR(c.x(), robot.x + p.chassis.radius_m + 0.05f, 1e-4f);
+  EXPECT_NEAR(c.y(), robot.y, 1e-4f);
+  // Waits for the next map, then the contact blocks the planning and the driving grids.
+  EXPECT_EQ(e.control(robot, duet::Twist{}, t += 0.05).v, 0.0f);
+  e.update_map(g, robot, t);
+  const Eigen::Vector2i cc = e.inflated().cell_of(c);
+  EXPECT_EQ(e.inflated().state[e.inflated().index(cc.x(), cc.y())], duet::CellState::kOccupied);
+  EXPECT_EQ(e.local_grid().state[e.local_grid().index(cc.x(), cc.y())], duet::CellState::kOccupied);
+  EXPECT_LT(e.local_grid().clearance_m[e.local_grid().index(e.local_grid().cell_of(Eigen::Vector2f(robot.x, robot.y)).x(),
+                                                            e.local_grid().cell_of(Eigen::Vector2f(robot.x, robot.y)).y())],
+            0.3f);
 }
 
 TEST(Explorer, InvalidStandoffSearchThrows) {
@@ -260,6 +300,12 @@ TEST(Explorer, InvalidStandoffSearchThrows) {
     duet::ExplorerSettings u;
     u.squeeze_min_unknown_m2 = a.boxed_in_area_m2;
     EXPECT_THROW(duet::Explorer(p, u), duet::Error) << bad;
+    duet::ExplorerSettings st;
+    st.stall_timeout_s = bad < 0.0f || std::isnan(bad) ? bad : 0.0f;
+    EXPECT_THROW(duet::Explorer(p, st), duet::Error) << bad;
+    duet::ExplorerSettings cr;
+    cr.contact_radius_m = bad;
+    EXPECT_THROW(duet::Explorer(p, cr), duet::Error) << bad;
   }
 }
 

@@ -64,6 +64,12 @@ struct ExplorerSettings {
   float nominal_speed_mps = 0.3f;     ///< path length / this is added to the time limit [m/s], (0, inf)
   float blacklist_ttl_s = 60.0f;      ///< how long an abandoned goal stays blacklisted [s], (0, inf]
   float stuck_timeout_s = 4.0f;       ///< no admissible trajectory for this long abandons the goal [s], (0, inf)
+  /// Stall: commanded forward (>= 0.03 m/s) while the odometry measures no motion (< 0.01 m/s)
+  /// for this long [s], (0, inf). The robot has run into something its sensors cannot see (a
+  /// Kinect sees nothing nearer than 0.5 m): a contact obstacle is put just ahead of it, in every
+  /// grid the explorer plans and drives on from the next map update on, and the goal is abandoned.
+  float stall_timeout_s = 1.0f;
+  float contact_radius_m = 0.10f;     ///< radius of a contact obstacle [m], (0, 1]
   int final_retries = 3;              ///< decisions at later map updates before giving up, [0, 1000]
   /// Exploration is complete when no reachable frontier is left, even if the partial map
   /// simulation still offers a goal: its reward (Eq. 5 entropy reduction) never reaches zero
@@ -80,12 +86,16 @@ struct ExplorerSettings {
   /// under the inflation can so still be passed (the paper's footprint radius 0.23 m + 0.06 m
   /// leaves the Kobuki's 0.177 m body 0.11 m; Willow's doors close in the 0.29 m inflation).
   float squeeze_margin_m = 0.06f;
-  /// Shrink the radius (above) whenever the search reaches no goal, from any area; false: only
-  /// when boxed in (below). Observed-but-uncertain cells still block at this level.
-  bool squeeze_anywhere = true;
-  /// ... and then only towards frontiers of unknown regions at least this large [m^2], [0, inf)
-  /// (FrontierSettings::min_unknown_region_m2 for that search): a room behind a door, not the
-  /// pockets between clutter (Willow, true pose: a squeeze into 0.1 m pillars collided).
+  /// Shrink the radius (above) whenever the search reaches no goal, from any area (true); or only
+  /// when boxed in (false, the default; below). Observed-but-uncertain cells still block at
+  /// this level. Off by default because it costs collisions: on Willow (5400 s) it reached
+  /// 94.0 % with the true pose on seed 1 (0 collisions), but 93.1 % with 1 collision on seed 2,
+  /// and 88.6 % with 2 collisions on the corrected odometry (seed 3): the squeezed margin
+  /// (0.12 m around the body) is less than the pose's error or than what the sensors miss.
+  bool squeeze_anywhere = false;
+  /// With squeeze_anywhere, only towards frontiers of unknown regions at least this large [m^2],
+  /// [0, inf) (FrontierSettings::min_unknown_region_m2 for that search): a room behind a door,
+  /// not the pockets between clutter (no change on the runs above).
   float squeeze_min_unknown_m2 = 4.0f;
   /// When the robot is boxed in - the search reached less than this area of traversable cells
   /// from it (or none) [m^2], [0, inf); 0 = never - observed-but-uncertain cells stop blocking
@@ -120,6 +130,7 @@ struct ExplorerStats {
   /// uncertain cells not blocking either) after the search on the planning grid reached none.
   int relaxed_goals = 0;
   int boxed_in_goals = 0;           ///< of relaxed_goals, those with uncertain cells not blocking
+  int stalls = 0;                   ///< stalls detected (ExplorerSettings::stall_timeout_s): contact obstacles placed
   double decision_time_sum_s = 0.0;
   double decision_time_max_s = 0.0;
 };
@@ -164,6 +175,8 @@ class Explorer {
   /// inflated with the relaxed radius (and, when boxed in, observed-but-uncertain cells not
   /// blocking; see ExplorerSettings::squeeze_margin_m, ExplorerStats::relaxed_goals).
   [[nodiscard]] const InflatedGrid& planning_grid() const noexcept { return relaxed_active_ ? relaxed_ : inflated_; }
+  /// Contact obstacles placed at stalls (world xy), in every planning and driving grid.
+  [[nodiscard]] const std::vector<Eigen::Vector2f>& contacts() const noexcept { return contacts_; }
   /// The dynamic window's grid: unknown cells are obstacles, the trail is free.
   [[nodiscard]] const InflatedGrid& local_grid() const noexcept { return local_; }
   [[nodiscard]] const ExplorationDecision& last_decision() const noexcept { return decision_; }
@@ -175,6 +188,9 @@ class Explorer {
 
  private:
   void decide(const Pose2& robot, double now_s);
+  Twist control_step(const Pose2& robot, const Twist& current, double now_s);
+  /// Sets the cells within contact_radius_m of every contact to occupied.
+  void mark_contacts(OccupancyGrid& g) const;
   bool plan(const Pose2& robot);
   void abandon(int& counter, double now_s);
   [[nodiscard]] std::optional<Twist> escape(const Pose2& robot, const Twist& current) const;
@@ -212,6 +228,10 @@ class Explorer {
   InflatedGrid local_;
   OccupancyGrid local_grid_{0.05f};
   std::vector<Eigen::Vector2f> trail_;  ///< robot positions, 0.05 m apart
+  std::vector<Eigen::Vector2f> contacts_;  ///< see contacts()
+  OccupancyGrid contact_grid_{0.05f};      ///< the latest map with the contacts marked (when there are any)
+  Twist last_cmd_;                         ///< the last command control() returned
+  double stall_since_s_ = -1.0;
   GoalBlacklist blacklist_;
   ExplorationWorkspace ws_;
   PathWorkspace path_ws_;
