@@ -494,6 +494,56 @@ typedef struct duet_pose2 {
   float x, y, theta;
 } duet_pose2;
 
+/* --------------------------------------------------------------------------------------------
+ * Scan-to-map matching (kernels/scan_match.hpp): the planar pose near a prior at which 2D
+ * obstacle points (robot frame, e.g. an RGB-D frame's points between two heights) best lie on
+ * the grid's occupied cells - a likelihood field exp(-d^2 / (2 sigma^2)) of the distance d to the
+ * nearest occupied cell centre, searched over a lattice around the prior and refined, each
+ * candidate weighted by a Gaussian prior on its offset. The runtime corrects the wheel odometry
+ * with it at every map update.
+ * -------------------------------------------------------------------------------------------- */
+
+typedef struct duet_scan_match_settings {
+  float linear_window_m;    /* search +-this in x and y around the prior [m], [0, 5] (default 0.15) */
+  float angular_window_deg; /* search +-this in heading [deg], [0, 45] (default 1.5) */
+  float linear_step_m;      /* lattice step in x and y [m], (0, 1] (default 0.05) */
+  float angular_step_deg;   /* lattice step in heading [deg], (0, 10] (default 0.5) */
+  float sigma_m;            /* std of the likelihood field [m], (0, 1] (default 0.05) */
+  float max_distance_m;     /* distances clamped to this [m], (0, 10] (default 0.25) */
+  float prior_sigma_m;      /* std of the translation prior [m], > 0 (default 0.1) */
+  float prior_sigma_deg;    /* std of the heading prior [deg], > 0 (default 2) */
+  size_t min_points;        /* fewer finite points: DUET_SCAN_MATCH_TOO_FEW_POINTS, >= 1 (default 50) */
+  float min_score;          /* best mean score below this: NOT_CONFIDENT, [0, 1] (default 0.35) */
+} duet_scan_match_settings;
+
+DUET_API void duet_scan_match_settings_init(duet_scan_match_settings* settings);
+
+enum duet_scan_match_status {
+  DUET_SCAN_MATCH_MATCHED = 0,         /* pose is the best candidate */
+  DUET_SCAN_MATCH_TOO_FEW_POINTS = 1,  /* pose is the prior */
+  DUET_SCAN_MATCH_NOT_CONFIDENT = 2,   /* pose is the prior (best score below min_score) */
+};
+
+typedef struct duet_scan_match_result {
+  int status;             /* enum duet_scan_match_status */
+  duet_pose2 pose;        /* the matched pose, or the prior */
+  float score;            /* mean likelihood of `pose` over the points, [0, 1] */
+  float prior_score;      /* ... of the prior */
+  size_t candidates;      /* poses scored */
+} duet_scan_match_result;
+
+/* Matches `count` 2D points (x, y [m] in the robot frame; 2 floats at xy_stride bytes, 0 =
+ * packed; non-finite points are skipped but count in the mean) against `grid` around `prior`
+ * (map frame) and writes the result to *out. The distance field is computed from the grid on
+ * every call (one Euclidean distance transform of the whole grid, a few ms for 1000 x 1000
+ * cells): occupied = log-odds >= 0.619 (p >= 0.65). Errors (DUET_ERROR_INVALID_ARGUMENT): NULL
+ * out, a NULL or misaligned buffer with count > 0, a non-finite prior, invalid settings (the
+ * message names the field); *out is then unchanged. Parallel inside (the device's threads);
+ * the result does not depend on the thread count. Thread-safe (shared on `grid`). */
+DUET_API void duet_grid_scan_match(duet_grid grid, const float* xy, size_t xy_stride, size_t count,
+                                   duet_pose2 prior, const duet_scan_match_settings* settings,
+                                   duet_scan_match_result* out);
+
 /* Differential-drive command: forward speed v [m/s], yaw rate omega [rad/s] (ccw positive). */
 typedef struct duet_twist {
   float v, omega;

@@ -27,6 +27,7 @@
 #include <duet/kernels/observation.hpp>
 #include <duet/kernels/partial_sim.hpp>
 #include <duet/kernels/path.hpp>
+#include <duet/kernels/scan_match.hpp>
 
 #include <tbb/task_arena.h>
 
@@ -249,6 +250,7 @@ NormalSettings to_cpp(const duet_normal_settings* s);
 ClusteringSettings to_cpp(const duet_clustering_settings* s);
 SegmentationSettings to_cpp(const duet_segmentation_settings* s);
 GridUpdateSettings to_cpp(const duet_grid_update_settings* s);
+ScanMatchSettings to_cpp(const duet_scan_match_settings* s);
 
 // ---- planner settings (planner_settings.cpp); `name` prefixes the C-level field messages ----
 

@@ -135,6 +135,40 @@ DUET_API size_t duet_grid_get_known_cells(duet_grid grid) {
   return r;
 }
 
+DUET_API void duet_grid_scan_match(duet_grid grid, const float* xy, size_t xy_stride, size_t count,
+                                   duet_pose2 prior, const duet_scan_match_settings* settings,
+                                   duet_scan_match_result* out) {
+  with_grid(grid, "duet_grid_scan_match", [&](Grid& g) {
+    if (out == nullptr) invalid_argument("out is NULL");
+    const std::size_t st = check_buffer(xy, xy_stride, count, 2 * sizeof(float), 4, "xy");
+    if (!std::isfinite(prior.x) || !std::isfinite(prior.y) || !std::isfinite(prior.theta)) invalid_argument("prior is not finite");
+    const duet::ScanMatchSettings s = to_cpp(settings);
+    std::vector<Eigen::Vector2f> pts(count);
+    for (std::size_t i = 0; i < count; ++i) {
+      const auto* p = reinterpret_cast<const float*>(reinterpret_cast<const unsigned char*>(xy) + i * st);
+      pts[i] = Eigen::Vector2f(p[0], p[1]);
+    }
+    duet::InflatedGrid field;
+    duet::ScanMatchResult r;
+    {
+      std::shared_lock lock(g.mutex);
+      duet::InflationSettings f;
+      f.robot_radius_m = 0.0f;
+      f.unknown_is_obstacle = false;
+      f.uncertain_is_obstacle = false;
+      in_arena(*g.device, [&] {
+        duet::inflate(duet::GridView(g.grid), f, field);
+        r = duet::scan_match(field.clearance(), pts, duet::Pose2{prior.x, prior.y, prior.theta}, s);
+      });
+    }
+    out->status = static_cast<int>(r.status);
+    out->pose = duet_pose2{r.pose.x, r.pose.y, r.pose.theta};
+    out->score = r.score;
+    out->prior_score = r.prior_score;
+    out->candidates = r.candidates;
+  });
+}
+
 DUET_API void duet_grid_copy_logodds(duet_grid grid, float* out, size_t count) {
   with_grid(grid, "duet_grid_copy_logodds", [&](Grid& g) {
     std::shared_lock lock(g.mutex);

@@ -96,6 +96,24 @@ GridUpdateSettings to_cpp(const duet_grid_update_settings* s) {
   return c;
 }
 
+ScanMatchSettings to_cpp(const duet_scan_match_settings* s) {
+  ScanMatchSettings c;
+  if (s != nullptr) {
+    c.linear_window_m = s->linear_window_m;
+    c.angular_window_deg = s->angular_window_deg;
+    c.linear_step_m = s->linear_step_m;
+    c.angular_step_deg = s->angular_step_deg;
+    c.sigma_m = s->sigma_m;
+    c.max_distance_m = s->max_distance_m;
+    c.prior_sigma_m = s->prior_sigma_m;
+    c.prior_sigma_deg = s->prior_sigma_deg;
+    c.min_points = s->min_points;
+    c.min_score = s->min_score;
+  }
+  validate(c);
+  return c;
+}
+
 }  // namespace duet::capi
 
 using namespace duet::capi;
@@ -150,6 +168,21 @@ DUET_API void duet_grid_update_settings_init(duet_grid_update_settings* settings
   settings->clear_along_rays = c.clear_along_rays ? 1 : 0;
   settings->max_ray_length_m = c.max_ray_length_m;
   settings->grow_margin_cells = c.grow_margin_cells;
+}
+
+DUET_API void duet_scan_match_settings_init(duet_scan_match_settings* settings) {
+  if (settings == nullptr) return;
+  const duet::ScanMatchSettings c;
+  settings->linear_window_m = c.linear_window_m;
+  settings->angular_window_deg = c.angular_window_deg;
+  settings->linear_step_m = c.linear_step_m;
+  settings->angular_step_deg = c.angular_step_deg;
+  settings->sigma_m = c.sigma_m;
+  settings->max_distance_m = c.max_distance_m;
+  settings->prior_sigma_m = c.prior_sigma_m;
+  settings->prior_sigma_deg = c.prior_sigma_deg;
+  settings->min_points = c.min_points;
+  settings->min_score = c.min_score;
 }
 
 DUET_API void duet_sensor_frame_init(duet_sensor_frame* frame) {

@@ -8,6 +8,8 @@
 #include <duet/kernels/normals.hpp>
 #include <duet/kernels/segmentation.hpp>
 #include <duet/kernels/voxel_filter.hpp>
+#include <duet/kernels/inflation.hpp>
+#include <duet/kernels/scan_match.hpp>
 
 #include <cmath>
 #include <cstdint>
@@ -72,6 +74,20 @@ TEST(CapiSettings, InitFunctionsMirrorTheCppDefaults) {
   EXPECT_EQ(bp.min_depth_m, cbp.min_depth_m);
   EXPECT_EQ(bp.max_depth_m, cbp.max_depth_m);
   EXPECT_EQ(bp.pixel_step, cbp.pixel_step);
+
+  duet_scan_match_settings sm;
+  duet_scan_match_settings_init(&sm);
+  const duet::ScanMatchSettings csm;
+  EXPECT_EQ(sm.linear_window_m, csm.linear_window_m);
+  EXPECT_EQ(sm.angular_window_deg, csm.angular_window_deg);
+  EXPECT_EQ(sm.linear_step_m, csm.linear_step_m);
+  EXPECT_EQ(sm.angular_step_deg, csm.angular_step_deg);
+  EXPECT_EQ(sm.sigma_m, csm.sigma_m);
+  EXPECT_EQ(sm.max_distance_m, csm.max_distance_m);
+  EXPECT_EQ(sm.prior_sigma_m, csm.prior_sigma_m);
+  EXPECT_EQ(sm.prior_sigma_deg, csm.prior_sigma_deg);
+  EXPECT_EQ(sm.min_points, csm.min_points);
+  EXPECT_EQ(sm.min_score, csm.min_score);
 
   duet_voxel_filter_settings vf;
   duet_voxel_filter_settings_init(&vf);
@@ -461,6 +477,93 @@ TEST_F(DeviceTest, GridUpdateEqualsCppPackedAndStrided) {
   }
   duet_grid_release(packed);
   duet_grid_release(strided);
+}
+
+// duet_grid_scan_match == inflate (occupied cells only) + scan_match on the same grid, packed and
+// strided points, default and custom settings; and the C++ result moves towards the truth.
+TEST_F(DeviceTest, GridScanMatchEqualsCppPackedAndStrided) {
+  // A 4 x 3 m room (walls at 0.5 m height, obstacle points) seen from its middle.
+  std::vector<float> xyz;
+  auto wall = [&](float x0, float y0, float x1, float y1) {
+    for (float t = 0.0f; t <= 1.0f; t += 0.005f) {
+      xyz.push_back(x0 + t * (x1 - x0));
+      xyz.push_back(y0 + t * (y1 - y0));
+      xyz.push_back(0.5f);
+    }
+  };
+  wall(-2.0f, -1.5f, 2.0f, -1.5f);
+  wall(2.0f, -1.5f, 2.0f, 1.5f);
+  wall(2.0f, 1.5f, -2.0f, 1.5f);
+  wall(-2.0f, 1.5f, -2.0f, -1.5f);
+  wall(0.5f, 0.3f, 1.2f, 0.3f);  // a box edge
+  const std::size_t n = xyz.size() / 3;
+  std::vector<std::uint8_t> labels(n, DUET_LABEL_OBSTACLE);
+  std::vector<duet::PointLabel> cl(n, duet::PointLabel::kObstacle);
+  duet::OccupancyGrid expected(0.05f);
+  duet::GridUpdateWorkspace ws;
+  duet::update_grid(expected, {0.0f, 0.0f}, duet::PointsView(xyz.data(), n), cl,
+                    duet::GridUpdateSettings{}, ws);
+  duet_grid g = duet_grid_new(device_, 0.05f);
+  duet_grid_update(g, 0.0f, 0.0f, xyz.data(), 0, labels.data(), 0, n, nullptr);
+  ASSERT_EQ(take(), DUET_ERROR_NONE) << message();
+  // The scan: the wall points seen from `truth`, in the robot frame.
+  const duet::Pose2 truth{0.1f, -0.05f, 0.02f};
+  const float c = std::cos(truth.theta), sn = std::sin(truth.theta);
+  std::vector<float> xy;
+  struct Rec {
+    float xy[2];
+    double pad;
+  };
+  std::vector<Rec> recs;
+  std::vector<Eigen::Vector2f> pts;
+  for (std::size_t i = 0; i < n; i += 3) {
+    const float dx = xyz[3 * i] - truth.x, dy = xyz[3 * i + 1] - truth.y;
+    const Eigen::Vector2f p(c * dx + sn * dy, -sn * dx + c * dy);
+    pts.push_back(p);
+    xy.push_back(p.x());
+    xy.push_back(p.y());
+    recs.push_back(Rec{{p.x(), p.y()}, 0.0});
+  }
+  const duet::Pose2 prior{truth.x + 0.06f, truth.y - 0.04f, truth.theta + 0.01f};
+  duet::InflationSettings f;
+  f.robot_radius_m = 0.0f;
+  f.unknown_is_obstacle = false;
+  f.uncertain_is_obstacle = false;
+  duet::InflatedGrid field;
+  duet::inflate(duet::GridView(expected), f, field);
+  duet::ScanMatchSettings custom;
+  custom.prior_sigma_deg = 10.0f;
+  custom.linear_window_m = 0.2f;
+  duet_scan_match_settings cs;
+  duet_scan_match_settings_init(&cs);
+  cs.prior_sigma_deg = 10.0f;
+  cs.linear_window_m = 0.2f;
+  for (const bool use_custom : {false, true}) {
+    const duet::ScanMatchResult want = duet::scan_match(field.clearance(), pts, prior, use_custom ? custom : duet::ScanMatchSettings{});
+    EXPECT_EQ(want.status, duet::ScanMatchStatus::kMatched);
+    EXPECT_LT(std::hypot(want.pose.x - truth.x, want.pose.y - truth.y), std::hypot(prior.x - truth.x, prior.y - truth.y));
+    for (const bool strided : {false, true}) {
+      duet_scan_match_result got{};
+      duet_grid_scan_match(g, strided ? recs[0].xy : xy.data(), strided ? sizeof(Rec) : 0, pts.size(),
+                           duet_pose2{prior.x, prior.y, prior.theta}, use_custom ? &cs : nullptr, &got);
+      ASSERT_EQ(take(), DUET_ERROR_NONE) << message();
+      EXPECT_EQ(got.status, DUET_SCAN_MATCH_MATCHED);
+      EXPECT_EQ(got.pose.x, want.pose.x);
+      EXPECT_EQ(got.pose.y, want.pose.y);
+      EXPECT_EQ(got.pose.theta, want.pose.theta);
+      EXPECT_EQ(got.score, want.score);
+      EXPECT_EQ(got.prior_score, want.prior_score);
+      EXPECT_EQ(got.candidates, want.candidates);
+    }
+  }
+  // No points: the prior, TOO_FEW_POINTS (not an error).
+  duet_scan_match_result none{};
+  duet_grid_scan_match(g, nullptr, 0, 0, duet_pose2{1.0f, 2.0f, 0.5f}, nullptr, &none);
+  EXPECT_EQ(take(), DUET_ERROR_NONE) << message();
+  EXPECT_EQ(none.status, DUET_SCAN_MATCH_TOO_FEW_POINTS);
+  EXPECT_EQ(none.pose.x, 1.0f);
+  EXPECT_EQ(none.pose.theta, 0.5f);
+  duet_grid_release(g);
 }
 
 TEST(CapiThreads, ResultsDoNotDependOnTheDeviceThreadCount) {

@@ -102,6 +102,12 @@ std::vector<std::pair<std::string, std::function<void()>>> all_calls(duet_device
       {"duet_grid_copy_logodds", [=] { duet_grid_copy_logodds(g, out_f, 0); }},
       {"duet_grid_copy_probabilities", [=] { duet_grid_copy_probabilities(g, out_f, 0); }},
       {"duet_grid_copy_ros", [=] { duet_grid_copy_ros(g, out_i8, 0, 0.65f, 0.196f); }},
+      {"duet_grid_scan_match", [=] {
+         duet_scan_match_result r{};
+         r.candidates = 9;
+         duet_grid_scan_match(g, out_f, 0, 0, duet_pose2{0, 0, 0}, nullptr, &r);
+         EXPECT_EQ(r.candidates, 9u);
+       }},
   };
 }
 
@@ -624,6 +630,32 @@ TEST_F(DeviceTest, GridArgumentValidation) {
   duet_grid_update(g, 0.0f, 0.0f, xyz, 0, labels, 0, 2, &gs);
   EXPECT_EQ(take(), DUET_ERROR_INVALID_ARGUMENT);
   EXPECT_NE(message().find("clear_along_rays"), std::string::npos) << message();
+  // Scan matching: NULL out, a NULL buffer with points, a misaligned stride, a non-finite prior,
+  // invalid settings (named) - errors that leave *out unchanged; NULL grid.
+  duet_scan_match_result res{};
+  res.candidates = 77;
+  const float pts[4] = {1.0f, 0.0f, 0.0f, 1.0f};
+  duet_grid_scan_match(g, pts, 0, 2, duet_pose2{0, 0, 0}, nullptr, nullptr);
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_ARGUMENT);
+  duet_grid_scan_match(g, nullptr, 0, 2, duet_pose2{0, 0, 0}, nullptr, &res);
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_ARGUMENT);
+  duet_grid_scan_match(g, pts, 3, 2, duet_pose2{0, 0, 0}, nullptr, &res);
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_ARGUMENT);
+  duet_grid_scan_match(g, pts, 0, 2, duet_pose2{NAN, 0, 0}, nullptr, &res);
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("prior"), std::string::npos) << message();
+  duet_scan_match_settings ss;
+  duet_scan_match_settings_init(&ss);
+  ss.sigma_m = -1.0f;
+  duet_grid_scan_match(g, pts, 0, 2, duet_pose2{0, 0, 0}, &ss, &res);
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("sigma_m"), std::string::npos) << message();
+  EXPECT_EQ(res.candidates, 77u);
+  // On an empty grid (0 x 0) there is nothing to match: the prior, NOT_CONFIDENT or TOO_FEW_POINTS.
+  duet_grid_scan_match(g, pts, 0, 2, duet_pose2{0.5f, 0, 0}, nullptr, &res);
+  EXPECT_EQ(take(), DUET_ERROR_NONE) << message();
+  EXPECT_EQ(res.status, DUET_SCAN_MATCH_TOO_FEW_POINTS);
+  EXPECT_EQ(res.pose.x, 0.5f);
   // None of that touched the grid.
   EXPECT_EQ(duet_grid_get_width(g), 0);
   EXPECT_EQ(duet_grid_get_known_cells(g), 0u);
