@@ -8,7 +8,6 @@
 // Items = candidates x points; "err_mm" / "err_mdeg" = distance of the result from the truth.
 #include "bench_util.hpp"
 
-#include <duet/kernels/inflation.hpp>
 #include <duet/kernels/scan_match.hpp>
 
 #include <cmath>
@@ -41,11 +40,7 @@ std::vector<MatchInput>& inputs() {
       MatchInput m;
       m.name = plan_map_name(i);
       const GridView g = plan_map_view(i);
-      InflationSettings s;
-      s.robot_radius_m = 0.0f;
-      s.unknown_is_obstacle = false;
-      s.uncertain_is_obstacle = false;
-      arena(2).execute([&] { inflate(g, s, m.field); });
+      arena(2).execute([&] { occupied_distance(g, CellThresholds{}, m.field); });
       const Eigen::Vector2f r = plan_map_robot(i);
       m.truth = Pose2{r.x(), r.y(), 0.3f};
       m.prior = Pose2{r.x() + 0.07f, r.y() - 0.05f, 0.3f + 0.8f * kDeg};

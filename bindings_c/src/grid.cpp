@@ -152,12 +152,8 @@ DUET_API void duet_grid_scan_match(duet_grid grid, const float* xy, size_t xy_st
     duet::ScanMatchResult r;
     {
       std::shared_lock lock(g.mutex);
-      duet::InflationSettings f;
-      f.robot_radius_m = 0.0f;
-      f.unknown_is_obstacle = false;
-      f.uncertain_is_obstacle = false;
       in_arena(*g.device, [&] {
-        duet::inflate(duet::GridView(g.grid), f, field);
+        duet::occupied_distance(duet::GridView(g.grid), duet::CellThresholds{}, field);
         r = duet::scan_match(field.clearance(), pts, duet::Pose2{prior.x, prior.y, prior.theta}, s);
       });
     }

@@ -156,6 +156,15 @@ void validate(const ScanMatchSettings& s) {
     bad("angular_window_deg / angular_step_deg", s.angular_window_deg / s.angular_step_deg, "[0, 200]");
 }
 
+void occupied_distance(const GridView& grid, const CellThresholds& thresholds, InflatedGrid& out) {
+  InflationSettings s;
+  s.thresholds = thresholds;
+  s.robot_radius_m = 0.0f;
+  s.unknown_is_obstacle = false;
+  s.uncertain_is_obstacle = false;
+  inflate(grid, s, out);
+}
+
 float scan_match_score(ClearanceView distance, std::span<const Eigen::Vector2f> points_robot, const Pose2& pose,
                        const ScanMatchSettings& settings) {
   validate(settings);

@@ -174,26 +174,20 @@ Pose2 ExplorationRuntime::correct(std::span<const SensorFrame> frames, const Pos
     const Eigen::Vector3f& p = scan_cloud_.points[scan_keys_[k].second];
     scan_points_.emplace_back(p.x(), p.y());
   }
-  Pose2 at = prior;
+  Pose2 at = prior;  // not accepted: the predicted drift still applies
   bool accepted = false;
   if (grid.width() > 0 && grid.height() > 0 && scan_points_.size() >= pc.match.min_points) {
-    InflationSettings field;
-    field.robot_radius_m = 0.0f;
-    field.unknown_is_obstacle = false;
-    field.uncertain_is_obstacle = false;
-    field.thresholds = profile_.exploration.cells;
-    inflate(GridView(grid), field, distance_);
+    occupied_distance(GridView(grid), profile_.exploration.cells, distance_);
     const ScanMatchResult r = scan_match(distance_.clearance(), scan_points_, prior, pc.match);
     if (r.status == ScanMatchStatus::kMatched) {
       const float g = pc.gain;
       const float e_theta = std::remainder(r.pose.theta - prior.theta, kTwoPi);
       at = Pose2{prior.x + g * (r.pose.x - prior.x), prior.y + g * (r.pose.y - prior.y), std::remainder(prior.theta + g * e_theta, kTwoPi)};
       if (dt > 0.0) heading_rate_ += pc.rate_gain * e_theta / static_cast<float>(dt);
-      correction_ = compose(at, inverse(odom));
       accepted = true;
     }
   }
-  if (!accepted) correction_ = compose(prior, inverse(odom));  // the predicted drift still applies
+  correction_ = compose(at, inverse(odom));
   ++(accepted ? stats_.scan_matches : stats_.scan_match_rejected);
   stats_.scan_match_time_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return at;

@@ -27,6 +27,19 @@ Twist turn_in_place(float err, const Twist& current, const DwaSettings& ds) {
   return Twist{0.0f, std::clamp(w, current.omega - dw, current.omega + dw)};
 }
 
+/// Calls fn(log-odds) for every cell of `g` whose centre is within r of p.
+template <class F>
+void for_each_cell_in_disc(OccupancyGrid& g, const Eigen::Vector2f& p, float r, F&& fn) {
+  const int rc = static_cast<int>(std::ceil(r / g.resolution()));
+  const Eigen::Vector2i c = g.cell_of(p);
+  for (int dy = -rc; dy <= rc; ++dy)
+    for (int dx = -rc; dx <= rc; ++dx) {
+      const int x = c.x() + dx, y = c.y() + dy;
+      if (!g.in_bounds(x, y) || (g.cell_center(x, y) - p).norm() > r) continue;
+      fn(g.logodds()[g.index(x, y)]);
+    }
+}
+
 bool same_geometry(const GridView& a, const GridView& b) {
   return a.width == b.width && a.height == b.height && a.resolution_m == b.resolution_m &&
          a.origin.x() == b.origin.x() && a.origin.y() == b.origin.y();
@@ -69,17 +82,7 @@ Explorer::Explorer(const Profile& profile, const ExplorerSettings& settings)
 
 void Explorer::mark_contacts(OccupancyGrid& g) const {
   const float occ = std::max(profile_.exploration.cells.occupied_logodds, profile_.mapping.grid_update.max_logodds);
-  const float r = settings_.contact_radius_m;
-  const int rc = static_cast<int>(std::ceil(r / g.resolution()));
-  for (const Eigen::Vector2f& p : contacts_) {
-    const Eigen::Vector2i c = g.cell_of(p);
-    for (int dy = -rc; dy <= rc; ++dy)
-      for (int dx = -rc; dx <= rc; ++dx) {
-        const int x = c.x() + dx, y = c.y() + dy;
-        if (!g.in_bounds(x, y) || (g.cell_center(x, y) - p).norm() > r) continue;
-        g.logodds()[g.index(x, y)] = occ;
-      }
-  }
+  for (const Eigen::Vector2f& p : contacts_) for_each_cell_in_disc(g, p, settings_.contact_radius_m, [&](float& l) { l = occ; });
 }
 
 void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double now_s) {
@@ -104,16 +107,9 @@ void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double 
   const float free_l = std::min(profile_.exploration.cells.free_logodds, profile_.mapping.grid_update.min_logodds);
   const float res = local_grid_.resolution();
   auto clear_disc = [&](const Eigen::Vector2f& p, float r) {
-    const int rc = static_cast<int>(std::ceil(r / res));
-    const Eigen::Vector2i c = local_grid_.cell_of(p);
-    for (int dy = -rc; dy <= rc; ++dy)
-      for (int dx = -rc; dx <= rc; ++dx) {
-        const int x = c.x() + dx, y = c.y() + dy;
-        if (!local_grid_.in_bounds(x, y)) continue;
-        if ((local_grid_.cell_center(x, y) - p).norm() > r) continue;
-        float& l = local_grid_.logodds()[local_grid_.index(x, y)];
-        if (std::isnan(l)) l = free_l;
-      }
+    for_each_cell_in_disc(local_grid_, p, r, [&](float& l) {
+      if (std::isnan(l)) l = free_l;
+    });
   };
   // The body's trail is free; so is the spot the robot was set down on, out to the dynamic
   // window's footprint plus a cell (a robot is placed on free floor).
@@ -123,7 +119,6 @@ void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double 
   for (const Eigen::Vector2f& p : trail_) clear_disc(p, body_cells_r);
   if (!trail_.empty())
     clear_disc(trail_.front(), profile_.exploration.dwa.robot_radius_m + profile_.exploration.dwa.safety_margin_m + res);
-  if (!contacts_.empty()) mark_contacts(local_grid_);  // over the trail: the contact is in front of it
   InflationSettings local_settings = profile_.exploration.inflation;
   local_settings.unknown_is_obstacle = true;
   inflate(GridView(local_grid_), local_settings, local_);

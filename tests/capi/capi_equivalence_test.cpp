@@ -8,7 +8,6 @@
 #include <duet/kernels/normals.hpp>
 #include <duet/kernels/segmentation.hpp>
 #include <duet/kernels/voxel_filter.hpp>
-#include <duet/kernels/inflation.hpp>
 #include <duet/kernels/scan_match.hpp>
 
 #include <cmath>
@@ -525,12 +524,8 @@ TEST_F(DeviceTest, GridScanMatchEqualsCppPackedAndStrided) {
     recs.push_back(Rec{{p.x(), p.y()}, 0.0});
   }
   const duet::Pose2 prior{truth.x + 0.06f, truth.y - 0.04f, truth.theta + 0.01f};
-  duet::InflationSettings f;
-  f.robot_radius_m = 0.0f;
-  f.unknown_is_obstacle = false;
-  f.uncertain_is_obstacle = false;
   duet::InflatedGrid field;
-  duet::inflate(duet::GridView(expected), f, field);
+  duet::occupied_distance(duet::GridView(expected), duet::CellThresholds{}, field);
   duet::ScanMatchSettings custom;
   custom.prior_sigma_deg = 10.0f;
   custom.linear_window_m = 0.2f;

@@ -5,7 +5,6 @@
 #include "kernel_test_util.hpp"
 
 #include <duet/kernels/error.hpp>
-#include <duet/kernels/inflation.hpp>
 #include <duet/kernels/scan_match.hpp>
 
 #include <gtest/gtest.h>
@@ -27,13 +26,7 @@ struct Map {
   int w = 0, h = 0;
   InflatedGrid field;
   /// Distance to the nearest occupied cell (unknown and uncertain cells not blocking).
-  void build() {
-    InflationSettings s;
-    s.robot_radius_m = 0.0f;
-    s.unknown_is_obstacle = false;
-    s.uncertain_is_obstacle = false;
-    inflate(GridView(l, w, h, kRes, Eigen::Vector2f::Zero()), s, field);
-  }
+  void build() { occupied_distance(GridView(l, w, h, kRes, Eigen::Vector2f::Zero()), CellThresholds{}, field); }
   void occupy(float x, float y) {
     const int ix = static_cast<int>(std::floor(x / kRes)), iy = static_cast<int>(std::floor(y / kRes));
     if (ix >= 0 && iy >= 0 && ix < w && iy < h) l[static_cast<std::size_t>(iy) * w + ix] = 3.0f;

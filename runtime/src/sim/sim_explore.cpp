@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 
 namespace duet::sim {
 namespace {
@@ -256,7 +257,7 @@ ExploreSummary SimExplore::summary() const {
   const Pose2 est = runtime_->pose();
   s.pose_error_m = std::hypot(est.x - tp.x, est.y - tp.y);
   s.pose_error_max_m = pose_error_max_;
-  s.heading_error_deg = std::fabs(std::remainder(est.theta - tp.theta, 2.0 * 3.14159265358979323846)) * 180.0 / 3.14159265358979323846;
+  s.heading_error_deg = std::fabs(std::remainder(est.theta - tp.theta, 2.0 * std::numbers::pi)) * 180.0 / std::numbers::pi;
   s.scan_matches = rs.scan_matches;
   s.scan_match_rejected = rs.scan_match_rejected;
   s.scan_match_time_s = rs.scan_match_time_s;

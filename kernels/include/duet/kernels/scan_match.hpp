@@ -26,6 +26,7 @@
 /// depend on the thread count.
 /// Thread safety: reentrant; parallel inside (TBB, over angles) in the caller's task arena.
 #include <duet/kernels/grid_view.hpp>
+#include <duet/kernels/inflation.hpp>
 #include <duet/kernels/motion_model.hpp>
 
 #include <cstddef>
@@ -62,14 +63,17 @@ struct ScanMatchResult {
   std::size_t candidates = 0; ///< poses scored
 };
 
+/// The distance field scan_match() reads: inflate() of `grid` with only occupied cells blocking
+/// (unknown and uncertain cells do not, radius 0); `out.clearance()` is the view to pass.
+void occupied_distance(const GridView& grid, const CellThresholds& thresholds, InflatedGrid& out);
+
 /// S(T) of one pose (the definition above), for tests and diagnostics. Points with a non-finite
 /// coordinate are skipped (they count in N). 0 for no points.
 [[nodiscard]] float scan_match_score(ClearanceView distance, std::span<const Eigen::Vector2f> points_robot,
                                      const Pose2& pose, const ScanMatchSettings& settings);
 
 /// Matches `points_robot` (robot frame [m]) against `distance` (distance to the nearest occupied
-/// cell centre, e.g. InflatedGrid::clearance() of inflate() with unknown and uncertain cells not
-/// blocking) around `prior` (map frame). Throws duet::Error(kInvalidArgument) for invalid
+/// cell centre: the clearance() of occupied_distance()) around `prior` (map frame). Throws duet::Error(kInvalidArgument) for invalid
 /// settings, a non-finite prior, or a view whose size does not match its span.
 [[nodiscard]] ScanMatchResult scan_match(ClearanceView distance, std::span<const Eigen::Vector2f> points_robot,
                                          const Pose2& prior, const ScanMatchSettings& settings = {});

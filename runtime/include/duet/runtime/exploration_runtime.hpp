@@ -21,7 +21,6 @@
 ///
 /// Thread safety: one thread calls tick(); the kernels run TBB-parallel in the caller's task
 /// arena and the results do not depend on the thread count.
-#include <duet/kernels/inflation.hpp>
 #include <duet/kernels/scan_match.hpp>
 #include <duet/runtime/explorer.hpp>
 #include <duet/runtime/mapper.hpp>
