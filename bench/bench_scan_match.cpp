@@ -3,8 +3,10 @@
 // on the planning benchmark maps of bench_frontier.cpp, from their robot cell. The scan: 2D rays
 // over two Kinect-like 57 deg fans (front and right, 0.25 deg apart) to the first occupied cell
 // within 5 m (its centre), in the robot frame; the prior is the truth + (0.07 m, -0.05 m, 0.8 deg).
-// naive = the same lattice scored plainly: scan_match_score() (bilinear over cell-centre
-// likelihoods, one point at a time) for every candidate, no field window precomputed.
+// naive = the same two lattices scored plainly: scan_match_score() (bilinear over cell-centre
+// likelihoods, one point at a time) for every candidate, no field window precomputed, and
+// without duet's last step (the quadratic fitted to the 27 scores around the best: 28 more
+// candidates, so duet's result is off the lattice and its err differs).
 // Items = candidates x points; "err_mm" / "err_mdeg" = distance of the result from the truth.
 #include "bench_util.hpp"
 

@@ -10,6 +10,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -231,6 +232,42 @@ ScanMatchResult scan_match(ClearanceView distance, std::span<const Eigen::Vector
   Candidate best = search(f, pts, n, prior, prior, nl, dl, na, da, settings, scored);
   // Refine: a quarter of the steps, +-3/4 of a coarse step around the best.
   best = search(f, pts, n, prior, best.pose, 3, dl / 4.0f, 3, da / 4.0f, settings, scored);
+  // Below the lattice: a quadratic in (x, y, theta) fitted by least squares to W on the 3 x 3 x 3
+  // quarter-step neighbourhood of the best; its peak (if the fit is concave, at most one quarter
+  // step from the best per axis) replaces the best only if its W is at least as high. Without it
+  // every match is a multiple of the quarter step (0.125 deg, 0.0125 m) from the prior, and those
+  // quantised offsets, fed to the runtime's heading-rate estimate, make it wander.
+  {
+    const float steps[3] = {dl / 4.0f, dl / 4.0f, da / 4.0f};
+    Eigen::Matrix<double, 27, 10> A;
+    Eigen::Matrix<double, 27, 1> b;
+    int row = 0;
+    for (int k = -1; k <= 1; ++k)
+      for (int j = -1; j <= 1; ++j)
+        for (int i = -1; i <= 1; ++i, ++row) {
+          const double u[3] = {static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)};
+          if (i == 0 && j == 0 && k == 0) {
+            b(row) = best.weighted;
+          } else {
+            const Pose2 q{best.pose.x + i * steps[0], best.pose.y + j * steps[1], best.pose.theta + k * steps[2]};
+            b(row) = search(f, pts, n, prior, q, 0, dl, 0, da, settings, scored).weighted;
+          }
+          // W ~ c + g.u + 1/2 u' H u, H symmetric: 1 + 3 + 6 coefficients.
+          A.row(row) << 1.0, u[0], u[1], u[2], 0.5 * u[0] * u[0], 0.5 * u[1] * u[1], 0.5 * u[2] * u[2], u[0] * u[1], u[0] * u[2], u[1] * u[2];
+        }
+    const Eigen::Matrix<double, 10, 1> c = (A.transpose() * A).ldlt().solve(A.transpose() * b);
+    Eigen::Matrix3d H;
+    H << c(4), c(7), c(8), c(7), c(5), c(9), c(8), c(9), c(6);
+    const Eigen::Vector3d g(c(1), c(2), c(3));
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(H);
+    if (es.info() == Eigen::Success && es.eigenvalues().maxCoeff() < 0.0) {
+      const Eigen::Vector3d u = (-H.inverse() * g).cwiseMax(-1.0).cwiseMin(1.0);
+      const Pose2 q{best.pose.x + static_cast<float>(u(0)) * steps[0], best.pose.y + static_cast<float>(u(1)) * steps[1],
+                    best.pose.theta + static_cast<float>(u(2)) * steps[2]};
+      const Candidate cq = search(f, pts, n, prior, q, 0, dl, 0, da, settings, scored);
+      if (cq.weighted >= best.weighted) best = cq;
+    }
+  }
   out.candidates = scored;
   out.prior_score = prior_c.score;
   out.score = best.score;

@@ -43,11 +43,15 @@ void validate(const PoseCorrectionSettings& s) {
   auto bad = [](const std::string& what) { fail(ErrorCode::kInvalidArgument, "PoseCorrectionSettings::" + what); };
   if (!(std::isfinite(s.min_height_m) && std::isfinite(s.max_height_m) && s.min_height_m < s.max_height_m))
     bad("min_height_m < max_height_m (finite) required, got " + std::to_string(s.min_height_m) + ", " + std::to_string(s.max_height_m));
+  if (!(std::isfinite(s.reference_age_s) && s.reference_age_s >= 0.0 && s.reference_age_s <= 3600.0))
+    bad("reference_age_s must be in [0, 3600] s, got " + std::to_string(s.reference_age_s));
   if (s.pixel_step < 1 || s.pixel_step > 64) bad("pixel_step must be in [1, 64], got " + std::to_string(s.pixel_step));
   if (s.max_points < 1) bad("max_points must be >= 1");
   if (!(std::isfinite(s.gain) && s.gain > 0.0f && s.gain <= 1.0f)) bad("gain must be in (0, 1], got " + std::to_string(s.gain));
   if (!(std::isfinite(s.rate_gain) && s.rate_gain >= 0.0f && s.rate_gain <= 1.0f))
     bad("rate_gain must be in [0, 1], got " + std::to_string(s.rate_gain));
+  if (!(std::isfinite(s.rate_gain_initial) && s.rate_gain_initial >= s.rate_gain && s.rate_gain_initial <= 1.0f && s.rate_gain_initial > 0.0f))
+    bad("rate_gain_initial must be in [rate_gain, 1] and > 0, got " + std::to_string(s.rate_gain_initial));
 }
 
 void validate(const RuntimeSettings& s) {
@@ -176,14 +180,30 @@ Pose2 ExplorationRuntime::correct(std::span<const SensorFrame> frames, const Pos
   }
   Pose2 at = prior;  // not accepted: the predicted drift still applies
   bool accepted = false;
-  if (grid.width() > 0 && grid.height() > 0 && scan_points_.size() >= pc.match.min_points) {
-    occupied_distance(GridView(grid), profile_.exploration.cells, distance_);
+  // The reference map (PoseCorrectionSettings::reference_age_s): the copy before the latest.
+  if (pc.reference_age_s <= 0.0) {
+    if (grid.width() > 0 && grid.height() > 0) {
+      occupied_distance(GridView(grid), profile_.exploration.cells, distance_);
+      have_reference_ = true;
+    }
+  } else if (pending_t_ < 0.0 || t - pending_t_ >= pc.reference_age_s) {
+    if (pending_t_ >= 0.0 && pending_grid_.width() > 0 && pending_grid_.height() > 0) {
+      occupied_distance(GridView(pending_grid_), profile_.exploration.cells, distance_);
+      have_reference_ = true;
+    }
+    pending_grid_ = grid;
+    pending_t_ = t;
+  }
+  if (have_reference_ && scan_points_.size() >= pc.match.min_points) {
     const ScanMatchResult r = scan_match(distance_.clearance(), scan_points_, prior, pc.match);
     if (r.status == ScanMatchStatus::kMatched) {
       const float g = pc.gain;
       const float e_theta = std::remainder(r.pose.theta - prior.theta, kTwoPi);
       at = Pose2{prior.x + g * (r.pose.x - prior.x), prior.y + g * (r.pose.y - prior.y), std::remainder(prior.theta + g * e_theta, kTwoPi)};
-      if (dt > 0.0) heading_rate_ += pc.rate_gain * e_theta / static_cast<float>(dt);
+      if (dt > 0.0 && pc.rate_gain > 0.0f) {
+        const float k = std::max(pc.rate_gain, 1.0f / (1.0f / pc.rate_gain_initial + static_cast<float>(rate_updates_++)));
+        heading_rate_ += k * e_theta / static_cast<float>(dt);
+      }
       accepted = true;
     }
   }

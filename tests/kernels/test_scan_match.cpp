@@ -155,8 +155,9 @@ TEST(ScanMatch, ScoreMatchesTheReferenceAndTheSearchIsExhaustive) {
   ASSERT_EQ(r.status, ScanMatchStatus::kMatched);
   EXPECT_NEAR(r.score, scan_match_score(m.field.clearance(), pts, r.pose, s), 1e-4f);
   EXPECT_NEAR(r.prior_score, scan_match_score(m.field.clearance(), pts, prior, s), 1e-4f);
-  // Coarse lattice: 5 x 5 x 5 (+-2 steps of 0.05 m, 0.5 deg); refined: 7 x 7 x 7; plus the prior.
-  EXPECT_EQ(r.candidates, 1u + 125u + 343u);
+  // Coarse lattice: 5 x 5 x 5 (+-2 steps of 0.05 m, 0.5 deg); refined: 7 x 7 x 7; plus the prior,
+  // the 26 neighbours of the refined best (the quadratic fit) and the fitted peak.
+  EXPECT_EQ(r.candidates, 1u + 125u + 343u + 26u + 1u);
   // No coarse candidate weighs more than the result (the refinement can only add).
   const float w_best = weight(r.pose, prior, r.score, s);
   for (int k = -2; k <= 2; ++k)
@@ -165,6 +166,40 @@ TEST(ScanMatch, ScoreMatchesTheReferenceAndTheSearchIsExhaustive) {
         const Pose2 c{prior.x + i * s.linear_step_m, prior.y + j * s.linear_step_m, prior.theta + k * s.angular_step_deg * kDeg};
         EXPECT_LE(weight(c, prior, scan_match_score(m.field.clearance(), pts, c, s), s), w_best + 1e-4f) << i << " " << j << " " << k;
       }
+}
+
+TEST(ScanMatch, InterpolatesBelowTheLattice) {
+  // The lattice is centred on the prior, so without interpolation the result moves with the
+  // prior in quarter steps (0.125 deg, 0.0125 m). With a flat prior the peak is the scan's:
+  // priors a fraction of a step apart give nearly the same pose, and not a lattice point.
+  const auto walls = room_walls();
+  const Map m = map_of(walls);
+  ScanMatchSettings s;
+  s.prior_sigma_m = 10.0f;
+  s.prior_sigma_deg = 100.0f;
+  for (int seed = 1; seed <= 4; ++seed) {
+    const Pose2 truth{3.0f + 0.1f * seed, 2.5f, 0.3f * seed};
+    const auto pts = scan_from(walls, truth, 5.0f, 0.0f, seed);
+    float lo = 1e9f, hi = -1e9f, xlo = 1e9f, xhi = -1e9f;
+    bool off_lattice = false;
+    for (int k = 0; k < 4; ++k) {
+      const Pose2 prior{truth.x + 0.003f * k, truth.y - 0.004f, truth.theta + (0.03f * k - 0.04f) * kDeg};
+      const ScanMatchResult r = scan_match(m.field.clearance(), pts, prior, s);
+      ASSERT_EQ(r.status, ScanMatchStatus::kMatched);
+      const float dth = std::remainder(r.pose.theta - truth.theta, 2.0f * std::numbers::pi_v<float>) / kDeg;
+      lo = std::min(lo, dth);
+      hi = std::max(hi, dth);
+      xlo = std::min(xlo, r.pose.x - truth.x);
+      xhi = std::max(xhi, r.pose.x - truth.x);
+      const float steps = std::remainder(r.pose.theta - prior.theta, 2.0f * std::numbers::pi_v<float>) / (0.125f * kDeg);
+      off_lattice = off_lattice || std::abs(steps - std::round(steps)) > 0.05f;
+      EXPECT_LT(std::abs(dth), 0.15f) << "seed " << seed << " prior " << k;
+      EXPECT_LT(std::abs(r.pose.y - truth.y), 0.006f) << "seed " << seed << " prior " << k;
+    }
+    EXPECT_LT(hi - lo, 0.07f) << "seed " << seed;      // the lattice alone: 0.095 deg here
+    EXPECT_LT(xhi - xlo, 0.004f) << "seed " << seed;   // ... and 0.0095 m
+    EXPECT_TRUE(off_lattice) << "seed " << seed;
+  }
 }
 
 TEST(ScanMatch, SameResultOnOneAndTwoThreads) {
