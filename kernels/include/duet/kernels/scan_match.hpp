@@ -16,9 +16,10 @@
 /// so where the scan constrains nothing (a corridor's length) the prior is kept.
 /// Search: every candidate of a regular lattice (linear_step_m, angular_step_deg) within the
 /// window (exhaustive, the correlative scan matcher of Olson 2009 without its multi-resolution
-/// bound), then the same around the best at a quarter of the steps, then below the lattice: per
-/// axis a parabola through W at the best and its two quarter-step neighbours (its peak, at most
-/// half a quarter step away), kept only if W of the combined pose is at least the best's.
+/// bound), then the same around the best at a quarter of the steps, then below the lattice: a
+/// quadratic in (x, y, theta) fitted by least squares to W on the 3 x 3 x 3 quarter-step
+/// neighbourhood of the best; if it is concave its peak (clamped to one quarter step per axis)
+/// replaces the best when its W is at least the best's.
 ///
 /// The result is accepted (kMatched) when at least min_points points were given and the best
 /// S reaches min_score; else kNotConfident (too little structure or a bad map) or
