@@ -101,7 +101,9 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                 {"goals_moved", e.goals_moved},
                 {"relaxed_goals", e.relaxed_goals},
                 {"boxed_in_goals", e.boxed_in_goals},
-                {"stalls", e.stalls}};
+                {"stalls", e.stalls},
+                {"view_goals", e.view_goals},
+                {"view_goals_reached", e.view_goals_reached}};
   j["frames_rendered"] = s.frames_rendered;
   j["sets_integrated"] = s.sets_integrated;
   j["sets_not_integrated"] = s.sets_not_integrated;
@@ -175,6 +177,8 @@ nlohmann::json run_log(const sim::SimExplore& run) {
                               {"reachable_frontier_clusters", d.reachable_clusters},
                               {"frontier_reached_cells", d.reached_cells},
                               {"relaxed", d.relaxed},
+                              {"view", d.view},
+                              {"view_target", d.view ? nlohmann::json::array({d.view_target.x(), d.view_target.y()}) : nlohmann::json()},
                               {"nearest_frontier", {d.nearest_frontier.x(), d.nearest_frontier.y()}},
                               {"wall_time_ms", 1e3 * d.wall_time_s}});
   j["collisions"] = nlohmann::json::array();

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 namespace duet {
 
@@ -67,6 +68,13 @@ void validate(const ExplorerSettings& s) {
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::squeeze_min_unknown_m2 must be in [0, inf) m^2, got " + std::to_string(s.squeeze_min_unknown_m2));
   if (!(s.squeeze_margin_m >= 0.0f && s.squeeze_margin_m <= 1.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::squeeze_margin_m must be in [0, 1] m, got " + std::to_string(s.squeeze_margin_m));
+  if (!(s.view_range_m >= 0.0f && s.view_range_m <= 10.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_range_m must be in [0, 10] m, got " + std::to_string(s.view_range_m));
+  if (!(s.view_min_range_m >= 0.0f && (s.view_min_range_m <= s.view_range_m || (s.view_range_m == 0.0f && s.view_min_range_m <= 10.0f))))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_min_range_m must be in [0, view_range_m = " + std::to_string(s.view_range_m) +
+                                          "] m, got " + std::to_string(s.view_min_range_m));
+  if (s.view_rays < 4 || s.view_rays > 3600)
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_rays must be in [4, 3600], got " + std::to_string(s.view_rays));
   if (s.final_retries < 0 || s.final_retries > 1000)
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::final_retries must be in [0, 1000], got " + std::to_string(s.final_retries));
 }
@@ -184,6 +192,52 @@ bool Explorer::try_relaxed(const Pose2& robot, double now_s) {
   return true;
 }
 
+std::optional<Pose2> Explorer::find_view(const Pose2& robot, double now_s) {
+  // A fresh search on the planning grid: the relaxed one (if it ran) left its own distances.
+  const FrontierSettings& fs = profile_.exploration.strategy.frontier;
+  const FrontierResult f = find_frontier(inflated_, Eigen::Vector2f(robot.x, robot.y), blacklist_, now_s, fs, view_ws_);
+  if (f.status != FrontierStatus::kAllUnreachable && f.status != FrontierStatus::kAllBlacklisted &&
+      f.status != FrontierStatus::kFound)
+    return std::nullopt;  // no frontier, or the robot blocked: the search's distances were not computed
+  const InflatedGrid& g = inflated_;
+  const GridView geometry = model_.grid();  // the latest map: the geometry of inflated_
+  const std::vector<std::uint8_t>& mask = view_ws_.mask;
+  const std::vector<float>& dist = view_ws_.dist;
+  const float rmin = settings_.view_min_range_m, rmax = settings_.view_range_m;
+  const int rays = settings_.view_rays;
+  float best_len = std::numeric_limits<float>::infinity();
+  std::size_t best_cell = 0, best_target = 0;
+  const std::size_t n = g.cell_count();
+  for (std::size_t i = 0; i < n && i < mask.size(); ++i) {
+    if (mask[i] != 1) continue;  // frontier cells of kept clusters
+    // A frontier cell the robot can reach is the frontier search's business (too near, or
+    // blacklisted: it was stood at and looked at).
+    if (std::isfinite(dist[i])) continue;
+    const Eigen::Vector2f target = g.cell_center(i);
+    if (blacklist_.blocks(target, fs.blacklist_radius_m, now_s) || viewed_.blocks(target, fs.blacklist_radius_m, now_s)) continue;
+    for (int r = 0; r < rays; ++r) {
+      const float a = 2.0f * std::numbers::pi_v<float> * static_cast<float>(r) / static_cast<float>(rays);
+      const Eigen::Vector2f dir(std::cos(a), std::sin(a));
+      // Along the line of sight, through known-free cells only, the first cell the robot can
+      // stand on beyond the minimum range.
+      walk_cells(geometry, target, dir, 0.0f, rmax, [&](int ix, int iy, float t_enter, float) {
+        if (!g.in_bounds(ix, iy)) return false;
+        const std::size_t c = g.index(ix, iy);
+        if (g.state[c] != CellState::kFree) return false;
+        if (t_enter < rmin || !std::isfinite(dist[c]) || dist[c] >= best_len || !can_stand_on(ix, iy)) return true;
+        best_len = dist[c];
+        best_cell = c;
+        best_target = i;
+        return false;
+      });
+    }
+  }
+  if (!std::isfinite(best_len)) return std::nullopt;
+  const Eigen::Vector2f at = g.cell_center(best_cell), target = g.cell_center(best_target);
+  view_target_ = target;
+  return Pose2{at.x(), at.y(), std::atan2(target.y() - at.y(), target.x() - at.x())};
+}
+
 bool Explorer::plan(const Pose2& robot) {
   const PathResult r = plan_path(planning_grid(), Eigen::Vector2f(robot.x, robot.y), Eigen::Vector2f(goal_->x, goal_->y),
                                  profile_.exploration.path, path_ws_);
@@ -250,9 +304,13 @@ bool Explorer::recheck_goal() {
 
 void Explorer::abandon(int& counter, double now_s) {
   ++counter;
-  if (goal_) blacklist_.add(goal_target_, now_s, settings_.blacklist_ttl_s);
+  // A view goal's frontier cell is not looked for again (the robot could not get to where it is
+  // seen from); any other goal is blacklisted for a while.
+  if (goal_ && view_active_) viewed_.add(view_target_, now_s, std::numeric_limits<double>::infinity());
+  else if (goal_) blacklist_.add(goal_target_, now_s, settings_.blacklist_ttl_s);
   goal_.reset();
   relaxed_active_ = false;
+  view_active_ = false;
   path_.clear();
   dwa_state_.reset();
   stuck_since_s_ = -1.0;
@@ -319,11 +377,16 @@ void Explorer::decide(const Pose2& robot, double now_s) {
       }
     }
     relaxed_active_ = false;
+    view_active_ = false;
     if (!decision_.has_goal() && try_relaxed(robot, now_s)) {
       log_.back().status = decision_.status;
       log_.back().relaxed = true;
     }
-    if (!decision_.has_goal()) {
+    std::optional<Pose2> view;
+    if (!decision_.has_goal() && settings_.view_range_m > 0.0f &&
+        (decision_.status == ExplorationStatus::kAllUnreachable || decision_.status == ExplorationStatus::kAllBlacklisted))
+      view = find_view(robot, now_s);
+    if (!decision_.has_goal() && !view) {
       if (++no_goal_decisions_ > settings_.final_retries) {
         state_ = ExplorerState::kDone;
         stop_status_ = decision_.status;
@@ -331,7 +394,14 @@ void Explorer::decide(const Pose2& robot, double now_s) {
       wait_for_map_ = true;
       return;
     }
-    goal_ = decision_.goal;
+    if (view) {
+      view_active_ = true;
+      log_.back().view = true;
+      log_.back().view_target = view_target_;
+      goal_ = *view;
+    } else {
+      goal_ = decision_.goal;
+    }
     goal_target_ = Eigen::Vector2f(goal_->x, goal_->y);
     if (!recheck_goal()) {
       abandon(stats_.goals_abandoned_no_path, now_s);
@@ -343,7 +413,8 @@ void Explorer::decide(const Pose2& robot, double now_s) {
       continue;
     }
     log_.back().planned = true;
-    if (decision_.status == ExplorationStatus::kSimulatedGoal) ++stats_.simulated_goals;
+    if (view_active_) ++stats_.view_goals;
+    else if (decision_.status == ExplorationStatus::kSimulatedGoal) ++stats_.simulated_goals;
     else ++stats_.frontier_goals;
     no_goal_decisions_ = 0;
     float length = 0.0f;
@@ -435,13 +506,17 @@ Twist Explorer::control_step(const Pose2& robot, const Twist& current, double no
       // A frontier that is still a frontier after the robot stood at it and looked at it cannot
       // be observed from there (the inside of an obstacle behind a gap in its outline): never again.
       // For a goal on an approach cell the frontier cell it was for is the one looked at.
-      if (decision_.status == ExplorationStatus::kFrontierGoal) {
+      if (view_active_) {
+        viewed_.add(view_target_, now_s, std::numeric_limits<double>::infinity());
+        ++stats_.view_goals_reached;
+      } else if (decision_.status == ExplorationStatus::kFrontierGoal) {
         blacklist_.add(goal_target_, now_s, std::numeric_limits<double>::infinity());
         if (decision_.frontier.target_xy != goal_target_)
           blacklist_.add(decision_.frontier.target_xy, now_s, std::numeric_limits<double>::infinity());
       }
       goal_.reset();
       relaxed_active_ = false;
+      view_active_ = false;
       path_.clear();
       dwa_state_.reset();
       return Twist{};

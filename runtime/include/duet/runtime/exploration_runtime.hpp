@@ -66,7 +66,8 @@ struct PoseCorrectionSettings {
   /// baseline, but where the scan sees mostly newer space the match is not confident and only
   /// the odometry carries the pose. Measured: lab with a 7x gyro bias (200 s) 1.2 deg / 0.17 m
   /// with 5 s against 2.7 deg / 0.21 m with 0; Willow seeds 1-3 (5400 s) 89.6 / 82.9 / 84.4 %
-  /// coverage with 5 s against 89.3 / 89.3 / 89.2 % with 0 (see bench/RESULTS.md).
+  /// coverage with 5 s against 89.3 / 89.3 / 89.2 % with 0, both before view goals (see
+  /// bench/RESULTS.md).
   double reference_age_s = 0.0;
   float min_height_m = 0.15f;   ///< obstacle points from this height above the floor [m] (above the floor's noise)
   float max_height_m = 1.20f;   ///< ... up to this height [m] (the segmentation's obstacle band)

@@ -36,6 +36,9 @@
 ///    such a face made the robot enter the local margin, fall back to the global grid and hit
 ///    the shelf. The goal is re-checked (and moved again) at every map update. Blacklisting
 ///    uses the decision's own goal, not the moved one.
+///  - when no frontier can be gone to (all unreachable, or all reachable ones blacklisted) and
+///    the relaxed grid offers none either, the robot looks at them from where it can stand:
+///    view goals (ExplorerSettings::view_range_m), each frontier cell looked at once;
 ///  - exploration ends with the decision's status when it has no goal (no frontier left, all
 ///    unreachable, all blacklisted, robot blocked) - after `final_retries` further decisions
 ///    at later map updates, because one more map update often re-opens a frontier; with
@@ -103,6 +106,23 @@ struct ExplorerSettings {
   /// exploration that squeezes the robot against faces seen only at grazing incidence (lab,
   /// 10 seeds: 2 collisions with, 0 without).
   float boxed_in_area_m2 = 10.0f;
+  /// View goals: when the frontier search offers no goal (every frontier unreachable, or every
+  /// reachable one blacklisted) and the relaxed grid none either, the explorer looks at the
+  /// frontier cells it cannot go to from cells it can stand on - a room seen through a gap too
+  /// narrow for the robot, a cone of free cells through a doorway - before it stops. A view cell
+  /// lies on a straight line of known-free cells from a frontier cell, view_min_range_m to
+  /// view_range_m from it, is reachable and fits the dynamic window (can_stand_on); the goal is
+  /// the view cell with the shortest path from the robot, facing its frontier cell (the front
+  /// sensor looks along the line). Reached or abandoned, its frontier cell is never looked at
+  /// again (cells within the frontier blacklist radius of it neither), so the robot works along
+  /// a cone of free cells as far as each view reveals more. View goals are counted in
+  /// ExplorerStats::view_goals and marked in the decision log.
+  /// Range from the frontier cell [m], [0, 10]; 0 = no view goals (stop as the paper's rule says).
+  float view_range_m = 4.0f;
+  /// Nearest view cell to its frontier cell [m], [0, view_range_m] ([0, 10] with no view goals): beyond the sensors' minimum
+  /// range (0.5 m) plus the sensor's offset behind the robot's centre.
+  float view_min_range_m = 0.8f;
+  int view_rays = 72;  ///< directions cast from each frontier cell (evenly over 360 deg), [4, 3600]
 };
 void validate(const ExplorerSettings& s);
 
@@ -131,6 +151,8 @@ struct ExplorerStats {
   int relaxed_goals = 0;
   int boxed_in_goals = 0;           ///< of relaxed_goals, those with uncertain cells not blocking
   int stalls = 0;                   ///< stalls detected (ExplorerSettings::stall_timeout_s): contact obstacles placed
+  int view_goals = 0;               ///< view goals taken (ExplorerSettings::view_range_m)
+  int view_goals_reached = 0;       ///< of view_goals, those reached and looked from
   double decision_time_sum_s = 0.0;
   double decision_time_max_s = 0.0;
 };
@@ -147,6 +169,8 @@ struct DecisionRecord {
   int reachable_clusters = 0;       ///< frontier clusters the robot can reach (when the search ran)
   std::size_t reached_cells = 0;    ///< cells the frontier search reached from the robot (when it ran)
   bool relaxed = false;             ///< the goal came from the search on the relaxed grid
+  bool view = false;                ///< the goal is a view goal (ExplorerSettings::view_range_m)
+  Eigen::Vector2f view_target{0.0f, 0.0f};  ///< for a view goal: the frontier cell it looks at
   Eigen::Vector2f nearest_frontier{0.0f, 0.0f};  ///< the nearest reachable cluster's nearest cell
   double wall_time_s = 0.0;         ///< how long decide_goal() took
 };
@@ -216,6 +240,9 @@ class Explorer {
   /// boxed_in_area_m2); true (and decision_ set to its frontier goal, relaxed_active_) if it
   /// found one.
   bool try_relaxed(const Pose2& robot, double now_s);
+  /// A view goal (see ExplorerSettings::view_range_m) from the latest map, or none; sets
+  /// view_target_ to the frontier cell it looks at.
+  [[nodiscard]] std::optional<Pose2> find_view(const Pose2& robot, double now_s);
 
   Profile profile_;
   ExplorerSettings settings_;
@@ -233,6 +260,10 @@ class Explorer {
   Twist last_cmd_;                         ///< the last command control() returned
   double stall_since_s_ = -1.0;
   GoalBlacklist blacklist_;
+  GoalBlacklist viewed_;             ///< frontier cells looked at from a view goal (never again)
+  bool view_active_ = false;         ///< the current goal is a view goal
+  Eigen::Vector2f view_target_{0.0f, 0.0f};  ///< the frontier cell the current view goal looks at
+  FrontierWorkspace view_ws_;        ///< the view search's frontier search
   ExplorationWorkspace ws_;
   PathWorkspace path_ws_;
   DwaState dwa_state_;
