@@ -70,9 +70,11 @@ void validate(const ExplorerSettings& s) {
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::squeeze_margin_m must be in [0, 1] m, got " + std::to_string(s.squeeze_margin_m));
   if (!(s.view_range_m >= 0.0f && s.view_range_m <= 10.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_range_m must be in [0, 10] m, got " + std::to_string(s.view_range_m));
-  if (!(s.view_min_range_m >= 0.0f && (s.view_min_range_m <= s.view_range_m || (s.view_range_m == 0.0f && s.view_min_range_m <= 10.0f))))
-    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_min_range_m must be in [0, view_range_m = " + std::to_string(s.view_range_m) +
-                                          "] m, got " + std::to_string(s.view_min_range_m));
+  // At most view_range_m; with no view goals (view_range_m = 0) at most view_range_m's own bound.
+  const float view_min_max = s.view_range_m > 0.0f ? s.view_range_m : 10.0f;
+  if (!(s.view_min_range_m >= 0.0f && s.view_min_range_m <= view_min_max))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_min_range_m must be in [0, " + std::to_string(view_min_max) +
+                                          "] m (view_range_m, or 10 with no view goals), got " + std::to_string(s.view_min_range_m));
   if (s.view_rays < 4 || s.view_rays > 3600)
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_rays must be in [4, 3600], got " + std::to_string(s.view_rays));
   if (s.final_retries < 0 || s.final_retries > 1000)
@@ -204,7 +206,11 @@ std::optional<Pose2> Explorer::find_view(const Pose2& robot, double now_s) {
   const std::vector<std::uint8_t>& mask = view_ws_.mask;
   const std::vector<float>& dist = view_ws_.dist;
   const float rmin = settings_.view_min_range_m, rmax = settings_.view_range_m;
-  const int rays = settings_.view_rays;
+  std::vector<Eigen::Vector2f> dirs(static_cast<std::size_t>(settings_.view_rays));
+  for (std::size_t r = 0; r < dirs.size(); ++r) {
+    const float a = 2.0f * std::numbers::pi_v<float> * static_cast<float>(r) / static_cast<float>(dirs.size());
+    dirs[r] = Eigen::Vector2f(std::cos(a), std::sin(a));
+  }
   float best_len = std::numeric_limits<float>::infinity();
   std::size_t best_cell = 0, best_target = 0;
   const std::size_t n = g.cell_count();
@@ -215,9 +221,7 @@ std::optional<Pose2> Explorer::find_view(const Pose2& robot, double now_s) {
     if (std::isfinite(dist[i])) continue;
     const Eigen::Vector2f target = g.cell_center(i);
     if (blacklist_.blocks(target, fs.blacklist_radius_m, now_s) || viewed_.blocks(target, fs.blacklist_radius_m, now_s)) continue;
-    for (int r = 0; r < rays; ++r) {
-      const float a = 2.0f * std::numbers::pi_v<float> * static_cast<float>(r) / static_cast<float>(rays);
-      const Eigen::Vector2f dir(std::cos(a), std::sin(a));
+    for (const Eigen::Vector2f& dir : dirs) {
       // Along the line of sight, through known-free cells only, the first cell the robot can
       // stand on beyond the minimum range.
       walk_cells(geometry, target, dir, 0.0f, rmax, [&](int ix, int iy, float t_enter, float) {
@@ -308,12 +312,16 @@ void Explorer::abandon(int& counter, double now_s) {
   // seen from); any other goal is blacklisted for a while.
   if (goal_ && view_active_) viewed_.add(view_target_, now_s, std::numeric_limits<double>::infinity());
   else if (goal_) blacklist_.add(goal_target_, now_s, settings_.blacklist_ttl_s);
+  drop_goal();
+  stuck_since_s_ = -1.0;
+}
+
+void Explorer::drop_goal() {
   goal_.reset();
   relaxed_active_ = false;
   view_active_ = false;
   path_.clear();
   dwa_state_.reset();
-  stuck_since_s_ = -1.0;
 }
 
 void Explorer::decide(const Pose2& robot, double now_s) {
@@ -514,11 +522,7 @@ Twist Explorer::control_step(const Pose2& robot, const Twist& current, double no
         if (decision_.frontier.target_xy != goal_target_)
           blacklist_.add(decision_.frontier.target_xy, now_s, std::numeric_limits<double>::infinity());
       }
-      goal_.reset();
-      relaxed_active_ = false;
-      view_active_ = false;
-      path_.clear();
-      dwa_state_.reset();
+      drop_goal();
       return Twist{};
     }
     case DwaStatus::kNoValidTrajectory:

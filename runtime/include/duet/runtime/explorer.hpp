@@ -217,6 +217,8 @@ class Explorer {
   void mark_contacts(OccupancyGrid& g) const;
   bool plan(const Pose2& robot);
   void abandon(int& counter, double now_s);
+  /// Forgets the current goal, its path and its modes (relaxed, view) and resets the dynamic window.
+  void drop_goal();
   [[nodiscard]] std::optional<Twist> escape(const Pose2& robot, const Twist& current) const;
   /// The dynamic window's radius + safety margin [m] (of dwa_settings()).
   [[nodiscard]] float dwa_clearance() const;
