@@ -38,6 +38,8 @@ struct ExploreOptions {
   bool realtime = false;
   bool true_pose = false;
   bool raw_odometry = false;
+  float recent_obstacles_s = 0.0f;
+  float cornered_after_s = 0.0f;
   bool quiet = false;
 };
 
@@ -98,12 +100,14 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                 {"replans", e.replans},
                 {"dwa_local_fallbacks", e.local_fallbacks},
                 {"escapes", e.escapes},
+                {"cornered_escapes", e.cornered_escapes},
                 {"goals_moved", e.goals_moved},
                 {"relaxed_goals", e.relaxed_goals},
                 {"boxed_in_goals", e.boxed_in_goals},
                 {"stalls", e.stalls},
                 {"view_goals", e.view_goals},
-                {"view_goals_reached", e.view_goals_reached}};
+                {"view_goals_reached", e.view_goals_reached},
+                {"recent_obstacle_cells", e.recent_obstacle_cells}};
   j["frames_rendered"] = s.frames_rendered;
   j["sets_integrated"] = s.sets_integrated;
   j["sets_not_integrated"] = s.sets_not_integrated;
@@ -246,6 +250,8 @@ int run_explore(const ExploreOptions& o) {
   es.realtime = o.realtime;
   es.use_true_pose = o.true_pose;
   es.pose_correction.enabled = !o.raw_odometry;
+  es.explorer.recent_obstacles_s = o.recent_obstacles_s;
+  es.explorer.cornered_after_s = o.cornered_after_s;
   const bool tty = stderr_is_tty() && !o.quiet;
   tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
   arena.execute([&] {
@@ -366,6 +372,12 @@ void add_explore_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--realtime", o->realtime, "pace the simulation by the wall clock");
   cmd->add_flag("--true-pose", o->true_pose, "DEBUGGING: map with the true pose instead of the wheel odometry");
   cmd->add_flag("--raw-odometry", o->raw_odometry, "pose = the raw wheel odometry (no scan-to-map correction)");
+  cmd->add_option("--recent-obstacles", o->recent_obstacles_s,
+                  "EXPERIMENTAL: obstacles of the last this many seconds block the dynamic window (ExplorerSettings::recent_obstacles_s; 0 = off)")
+      ->capture_default_str();
+  cmd->add_option("--cornered-after", o->cornered_after_s,
+                  "EXPERIMENTAL: escape a spot the dynamic window keeps the robot on this long [s] (ExplorerSettings::cornered_after_s; 0 = off)")
+      ->capture_default_str();
   cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
   cmd->callback([o, &exit_code] { exit_code = run_explore(*o); });

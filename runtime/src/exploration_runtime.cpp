@@ -31,6 +31,18 @@ Pose2 compose(const Pose2& a, const Pose2& b) {
   return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, std::remainder(a.theta + b.theta, 2.0f * std::numbers::pi_v<float>)};
 }
 
+/// A grid cell of resolution `res` (cells at multiples of res) as one sortable key, and back to
+/// its centre.
+std::uint64_t cell_key(float x, float y, float res) {
+  const auto cx = static_cast<std::int64_t>(std::floor(x / res)), cy = static_cast<std::int64_t>(std::floor(y / res));
+  return (static_cast<std::uint64_t>(cx + (1 << 30)) << 32) | static_cast<std::uint64_t>(cy + (1 << 30));
+}
+
+Eigen::Vector2f key_center(std::uint64_t k, float res) {
+  return {(static_cast<float>(static_cast<std::int64_t>(k >> 32) - (1 << 30)) + 0.5f) * res,
+          (static_cast<float>(static_cast<std::int64_t>(k & 0xFFFFFFFFull) - (1 << 30)) + 0.5f) * res};
+}
+
 Pose2 inverse(const Pose2& a) {
   const float c = std::cos(a.theta), s = std::sin(a.theta);
   return {-(c * a.x + s * a.y), -(-s * a.x + c * a.y), -a.theta};
@@ -120,6 +132,7 @@ void ExplorationRuntime::integrate(const ApproximateTimeCore::Set& set, double n
       }
     }
     mapper_.integrate(frames, to_isometry(at));
+    if (settings_.explorer.recent_obstacles_s > 0.0f) remember_obstacles(at, odom_at, t_frames);
     explorer_.update_map(mapper_.grid(), pose_, now_s);
     ++stats_.sets_integrated;
     while (next_map_t_ <= stamp + 1e-9) next_map_t_ += 1.0 / settings_.map_rate_hz;
@@ -127,6 +140,54 @@ void ExplorationRuntime::integrate(const ApproximateTimeCore::Set& set, double n
     ++stats_.sets_not_integrated;
   }
   for (std::size_t i = 0; i < n; ++i) sensors_[i]->recycle(std::move(images[i]));
+}
+
+void ExplorationRuntime::remember_obstacles(const Pose2& at, const Pose2& odom, double t) {
+  const ExplorerSettings& es = settings_.explorer;
+  const float res = mapper_.grid().resolution();
+  const float r2 = es.recent_obstacle_range_m * es.recent_obstacle_range_m;
+  const Eigen::Vector2f robot(at.x, at.y);
+  // One point per grid cell of this scan (the voxel filter leaves a column of points per cell).
+  recent_keys_.clear();
+  for (const Eigen::Vector2f& p : mapper_.last_obstacles()) {
+    if (!p.allFinite() || (p - robot).squaredNorm() > r2) continue;
+    recent_keys_.push_back(cell_key(p.x(), p.y(), res));
+  }
+  std::sort(recent_keys_.begin(), recent_keys_.end());
+  recent_keys_.erase(std::unique(recent_keys_.begin(), recent_keys_.end()), recent_keys_.end());
+  // Map -> odometry at the frames' time: the odometry is exact relative to the robot over the
+  // window (its drift is the pose error's source only over minutes).
+  const Pose2 odom_from_map = compose(odom, inverse(at));
+  RecentScan scan{t, {}};
+  scan.points.reserve(recent_keys_.size());
+  for (const std::uint64_t k : recent_keys_) {
+    const Eigen::Vector2f c = key_center(k, res);
+    const Pose2 q = compose(odom_from_map, Pose2{c.x(), c.y(), 0.0f});
+    scan.points.emplace_back(q.x, q.y);
+  }
+  recent_.push_back(std::move(scan));
+  while (!recent_.empty() && recent_.front().t < t - static_cast<double>(es.recent_obstacles_s)) recent_.pop_front();
+  // Back to the map frame with the correction the frames were integrated with (= the one the
+  // control loop uses until the next update); a cell counts when at least min_scans scans of the
+  // window put a point in it (a single noisy return does not).
+  const Pose2 map_from_odom = compose(at, inverse(odom));
+  recent_count_.clear();
+  for (std::size_t k = 0; k < recent_.size(); ++k)
+    for (const Eigen::Vector2f& p : recent_[k].points) {
+      const Pose2 q = compose(map_from_odom, Pose2{p.x(), p.y(), 0.0f});
+      recent_count_.emplace_back(cell_key(q.x, q.y, res), static_cast<std::uint32_t>(k));
+    }
+  std::sort(recent_count_.begin(), recent_count_.end());
+  recent_count_.erase(std::unique(recent_count_.begin(), recent_count_.end()), recent_count_.end());
+  recent_map_.clear();
+  const auto need = static_cast<std::size_t>(es.recent_obstacle_min_scans);
+  for (std::size_t b = 0; b < recent_count_.size();) {
+    std::size_t e = b + 1;
+    while (e < recent_count_.size() && recent_count_[e].first == recent_count_[b].first) ++e;
+    if (e - b >= need) recent_map_.push_back(key_center(recent_count_[b].first, res));
+    b = e;
+  }
+  explorer_.set_recent_obstacles(recent_map_);
 }
 
 Pose2 ExplorationRuntime::odometry_at(double t, const OdometryMsg& fallback) const {
@@ -165,9 +226,7 @@ Pose2 ExplorationRuntime::correct(std::span<const SensorFrame> frames, const Pos
     const Eigen::Vector3f& p = scan_cloud_.points[i];
     const float h = p.z() - floor_z;
     if (!(h >= pc.min_height_m && h <= pc.max_height_m)) continue;
-    const auto cx = static_cast<std::int64_t>(std::floor(p.x() / res)), cy = static_cast<std::int64_t>(std::floor(p.y() / res));
-    const std::uint64_t key = (static_cast<std::uint64_t>(cx + (1 << 30)) << 32) | static_cast<std::uint64_t>(cy + (1 << 30));
-    scan_keys_.emplace_back(key, static_cast<std::uint32_t>(i));
+    scan_keys_.emplace_back(cell_key(p.x(), p.y(), res), static_cast<std::uint32_t>(i));
   }
   std::sort(scan_keys_.begin(), scan_keys_.end());
   scan_keys_.erase(std::unique(scan_keys_.begin(), scan_keys_.end(), [](const auto& a, const auto& b) { return a.first == b.first; }),

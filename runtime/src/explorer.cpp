@@ -77,6 +77,14 @@ void validate(const ExplorerSettings& s) {
                                           "] m (view_range_m, or 10 with no view goals), got " + std::to_string(s.view_min_range_m));
   if (s.view_rays < 4 || s.view_rays > 3600)
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_rays must be in [4, 3600], got " + std::to_string(s.view_rays));
+  if (!(s.recent_obstacles_s >= 0.0f && s.recent_obstacles_s <= 3600.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::recent_obstacles_s must be in [0, 3600] s, got " + std::to_string(s.recent_obstacles_s));
+  if (!(s.recent_obstacle_range_m > 0.0f && s.recent_obstacle_range_m <= 10.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::recent_obstacle_range_m must be in (0, 10] m, got " + std::to_string(s.recent_obstacle_range_m));
+  if (s.recent_obstacle_min_scans < 1 || s.recent_obstacle_min_scans > 1000)
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::recent_obstacle_min_scans must be in [1, 1000], got " + std::to_string(s.recent_obstacle_min_scans));
+  if (!(std::isfinite(s.cornered_after_s) && s.cornered_after_s >= 0.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::cornered_after_s must be in [0, inf) s (0 = off), got " + std::to_string(s.cornered_after_s));
   if (s.final_retries < 0 || s.final_retries > 1000)
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::final_retries must be in [0, 1000], got " + std::to_string(s.final_retries));
 }
@@ -95,6 +103,39 @@ void Explorer::mark_contacts(OccupancyGrid& g) const {
   for (const Eigen::Vector2f& p : contacts_) for_each_cell_in_disc(g, p, settings_.contact_radius_m, [&](float& l) { l = occ; });
 }
 
+void Explorer::set_recent_obstacles(std::span<const Eigen::Vector2f> points) {
+  recent_.clear();
+  for (const Eigen::Vector2f& p : points)
+    if (p.allFinite()) recent_.push_back(p);
+}
+
+void Explorer::mark_recent(OccupancyGrid& g) {
+  const float occ = std::max(profile_.exploration.cells.occupied_logodds, profile_.mapping.grid_update.max_logodds);
+  const float occupied = profile_.exploration.cells.occupied_logodds;
+  // Decided on the map as given (before any cell is marked here): a cell within one cell of an
+  // obstacle of the map adds nothing the inflation's margin (a cell) does not already hold, and
+  // marking it would only thicken walls by the sensors' noise.
+  recent_cells_.clear();
+  for (const Eigen::Vector2f& p : recent_) {
+    const Eigen::Vector2i c = g.cell_of(p);
+    if (!g.in_bounds(c.x(), c.y())) continue;
+    bool near_map_obstacle = false;
+    for (int dy = -1; dy <= 1 && !near_map_obstacle; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int x = c.x() + dx, y = c.y() + dy;
+        if (g.in_bounds(x, y) && g.logodds()[g.index(x, y)] >= occupied) {
+          near_map_obstacle = true;
+          break;
+        }
+      }
+    if (!near_map_obstacle) recent_cells_.push_back(g.index(c.x(), c.y()));
+  }
+  std::sort(recent_cells_.begin(), recent_cells_.end());
+  recent_cells_.erase(std::unique(recent_cells_.begin(), recent_cells_.end()), recent_cells_.end());
+  for (const std::size_t i : recent_cells_) g.logodds()[i] = occ;
+  stats_.recent_obstacle_cells += recent_cells_.size();
+}
+
 void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double now_s) {
   const GridView view(grid);
   if (model_geometry_valid_ && same_geometry(model_.grid(), view)) {
@@ -105,15 +146,21 @@ void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double 
   }
   // Planning and driving see the contact obstacles too (the observation model keeps the map).
   const OccupancyGrid* map = &grid;
-  if (!contacts_.empty()) {
+  marked_ = !contacts_.empty();
+  if (marked_) {
     contact_grid_ = grid;
     mark_contacts(contact_grid_);
     map = &contact_grid_;
   }
   inflate(GridView(*map), profile_.exploration.inflation, inflated_);
   if (relaxed_active_) build_relaxed();
-  // The dynamic window's grid: unknown is an obstacle, except where the robot's body has been.
+  // The dynamic window's grid: unknown is an obstacle, except where the robot's body has been;
+  // the recent obstacles block (ExplorerSettings::recent_obstacles_s) - only here: where the
+  // pose has moved since a place was mapped, the map's copy of a wall and the recent one narrow
+  // a door between them, and planning on both closed Willow's doors (seed 6 stopped at 59 %
+  // with every frontier unreachable).
   local_grid_ = *map;
+  if (!recent_.empty()) mark_recent(local_grid_);
   const float free_l = std::min(profile_.exploration.cells.free_logodds, profile_.mapping.grid_update.min_logodds);
   const float res = local_grid_.resolution();
   auto clear_disc = [&](const Eigen::Vector2f& p, float r) {
@@ -153,7 +200,7 @@ void Explorer::build_relaxed() {
   if (relaxed_boxed_in_) relaxed.uncertain_is_obstacle = false;
   relaxed.robot_radius_m = relaxed_radius();
   // The latest map (the model holds its log-odds), with the contacts if any.
-  inflate(contacts_.empty() ? model_.grid() : GridView(contact_grid_), relaxed, relaxed_);
+  inflate(marked_ ? GridView(contact_grid_) : model_.grid(), relaxed, relaxed_);
 }
 
 bool Explorer::try_relaxed(const Pose2& robot, double now_s) {
@@ -322,6 +369,7 @@ void Explorer::drop_goal() {
   view_active_ = false;
   path_.clear();
   dwa_state_.reset();
+  cornered_s_ = 0.0f;
 }
 
 void Explorer::decide(const Pose2& robot, double now_s) {
@@ -433,13 +481,13 @@ void Explorer::decide(const Pose2& robot, double now_s) {
   }
 }
 
-std::optional<Twist> Explorer::escape(const Pose2& robot, const Twist& current) const {
+std::optional<Twist> Explorer::escape(const Pose2& robot, const Twist& current, const InflatedGrid& g, bool cornered) const {
   const DwaSettings ds = dwa_settings();
-  const InflatedGrid& g = planning_grid();
   Eigen::Vector2i c;
   if (!g.cell_of(Eigen::Vector2f(robot.x, robot.y), c)) return std::nullopt;
   const float here = g.clearance_m[g.index(c.x(), c.y())];
-  if (!(here < dwa_clearance())) return std::nullopt;  // not hemmed in by seen obstacles: nothing to escape
+  // Not hemmed in by seen obstacles (and not cornered): nothing to escape.
+  if (!cornered && !(here < dwa_clearance())) return std::nullopt;
   // The direction of the largest clearance among the cells 2 cells away.
   Eigen::Vector2f best_dir(0.0f, 0.0f);
   float best = here;
@@ -496,12 +544,14 @@ Twist Explorer::control_step(const Pose2& robot, const Twist& current, double no
   const DwaSettings ds = dwa_settings();
   const DwaState before = dwa_state_;
   DwaResult r = dwa_step(local_.clearance(), robot, current, path_, ds, dwa_state_, dwa_ws_);
+  bool fell_back = false;
   if (r.status == DwaStatus::kNoValidTrajectory) {
     // Hemmed in by cells nobody has seen (nearer than the sensors' min range, they stay
     // unknown): fall back to the global grid, where only seen obstacles count.
     dwa_state_ = before;
     r = dwa_step(planning_grid().clearance(), robot, current, path_, ds, dwa_state_, dwa_ws_);
     ++stats_.local_fallbacks;
+    fell_back = true;
   }
   switch (r.status) {
     case DwaStatus::kGoalReached: {
@@ -529,7 +579,7 @@ Twist Explorer::control_step(const Pose2& robot, const Twist& current, double no
       // Nothing admissible even on the global grid: the robot sits inside the dynamic window's
       // margin (a map update moved an obstacle nearer). Reversing is blind, so escape forward:
       // turn towards more clearance, then creep out.
-      if (const auto esc = escape(robot, current)) {
+      if (const auto esc = escape(robot, current, planning_grid(), false)) {
         ++stats_.escapes;
         return *esc;
       }
@@ -540,6 +590,26 @@ Twist Explorer::control_step(const Pose2& robot, const Twist& current, double no
       return r.cmd;
     default:
       stuck_since_s_ = -1.0;
+      // Cornered: the window has kept the robot within cornered_radius of one spot (turns in
+      // place, or creeping at a few mm/s while it spins) for cornered_after_s - more than a whole
+      // turn at the mapping's angular speed: at the edge of the traversable band, every forward
+      // motion reachable from the spin leaves it. Creep towards more clearance (on the grid the
+      // window used) until the robot is out of that spot.
+      {
+        constexpr float kCorneredRadius = 0.10f;
+        if ((here - cornered_at_).norm() > kCorneredRadius) {
+          cornered_at_ = here;
+          cornered_s_ = 0.0f;
+        }
+        cornered_s_ += ds.control_period_s;
+        if (settings_.cornered_after_s > 0.0f && cornered_s_ >= settings_.cornered_after_s) {
+          const InflatedGrid& g = fell_back ? planning_grid() : local_;
+          if (const auto esc = escape(robot, current, g, true)) {
+            ++stats_.cornered_escapes;
+            return *esc;
+          }
+        }
+      }
       return r.cmd;
   }
 }

@@ -26,6 +26,7 @@ void Mapper::integrate(std::span<const SensorFrame> frames, const Eigen::Isometr
   // All frames are validated and back-projected before anything is integrated.
   back_project(in_map, settings_.back_projection, raw_, &offsets_);
   stats_.raw_points += raw_.size();
+  obstacles_.clear();
   for (std::size_t i = 0; i < in_map.size(); ++i) {
     const std::size_t b = offsets_[i], n = offsets_[i + 1] - b;
     const PointsView pts = n ? PointsView(raw_.points[b].data(), n) : PointsView();
@@ -38,9 +39,11 @@ void Mapper::integrate(std::span<const SensorFrame> frames, const Eigen::Isometr
     estimate_normals(filtered_, ns);
     labels_.resize(filtered_.size());
     segment(filtered_.points_view(), filtered_.normals, settings_.segmentation, labels_);
-    for (const PointLabel l : labels_) {
+    for (std::size_t k = 0; k < labels_.size(); ++k) {
+      const PointLabel l = labels_[k];
       stats_.obstacle_points += l == PointLabel::kObstacle;
       stats_.floor_points += l == PointLabel::kFloor;
+      if (l == PointLabel::kObstacle) obstacles_.push_back(filtered_.points[k].head<2>());
     }
     update_grid(grid_, origin.head<2>(), filtered_.points_view(), labels_, settings_.grid_update, grid_ws_);
     filtered_.normals.clear();

@@ -263,6 +263,12 @@ TEST(DuetCli, ExploreErrorsNameTheFileAndTheProblem) {
   r = run("explore -q --world lab --sensor-rate fast --out " + (dir / "o").string());
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("--sensor-rate"), std::string::npos) << r.output;
+  r = run("explore -q --world lab --recent-obstacles -1 --out " + (dir / "o").string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("recent_obstacles_s"), std::string::npos) << r.output;
+  r = run("explore -q --world lab --cornered-after -2 --out " + (dir / "o").string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("cornered_after_s"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "o" / "summary.json"));
 }
 

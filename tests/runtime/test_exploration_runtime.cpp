@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -77,6 +78,106 @@ TEST(ExplorationRuntime, IntegratesSynchronizedSetsAtTheMapRate) {
   EXPECT_GT(front.recycled, 40);                      // buffers went back to the sensor
   EXPECT_EQ(chassis.commands.size(), 201u);           // one command per tick
   for (const auto& c : chassis.commands) EXPECT_TRUE(std::isfinite(c.v) && std::isfinite(c.omega));
+}
+
+// A robot standing at the odometry origin, ticked at 20 Hz with odometry at every tick and a
+// frame pair once a second: the front Kinect sees a wall front_depth ahead, the right one a
+// wall 2 m to the right.
+struct StandingRobot {
+  duet::Profile profile = duet::builtin_profile("dual");
+  ScriptedChassis chassis;
+  ScriptedSensor front, right;
+  duet::RgbdSensorInterface* sensors[2] = {&front, &right};
+  duet::ExplorationRuntime rt;
+  float front_depth = 2.0f;
+  explicit StandingRobot(const duet::RuntimeSettings& rs) : rt(profile, chassis, sensors, rs) {}
+  void run(int from, int to) {  // ticks [from, to) at t = 0.05 k
+    for (int k = from; k < to; ++k) {
+      const double t = 0.05 * k;
+      chassis.pending.push_back({t, {}, {}});
+      if (k % 20 == 0) {
+        duet::StampedRgbd f = wall_frame(profile.sensors[0], t);
+        std::fill(f.image.depth.begin(), f.image.depth.end(), static_cast<std::uint16_t>(front_depth * 1000.0f));
+        front.pending.push_back(std::move(f));
+        right.pending.push_back(wall_frame(profile.sensors[1], t));
+      }
+      rt.tick(t);
+    }
+  }
+};
+
+duet::RuntimeSettings one_hertz(float recent_obstacles_s) {
+  duet::RuntimeSettings rs;
+  rs.sensor_rate_hz = 1.0;
+  rs.pose_correction.enabled = false;
+  rs.explorer.recent_obstacles_s = recent_obstacles_s;
+  return rs;
+}
+
+// Recent obstacles (ExplorerSettings::recent_obstacles_s): the mapper's obstacle cells within
+// recent_obstacle_range_m of the robot, kept in the odometry frame and placed in the map frame
+// with the latest correction, one point per cell seen in at least two scans of the window. The
+// robot stands still; the front wall is at x = 1.882 m in the robot frame (the Kinect sits
+// 0.118 m behind the centre), the right one at y = -2 m. Then the pose is moved 1 m forward in
+// the map frame (a correction: the odometry did not move): the remembered walls move with it,
+// where the new frames put them too, while the map keeps the first copy. Then the front wall
+// goes out of range (4 m): after the window, none of it is remembered.
+TEST(ExplorationRuntime, RecentObstaclesMoveWithTheCorrectionAndAreForgotten) {
+  StandingRobot r(one_hertz(3.0f));
+  const duet::ExplorationRuntime& rt = r.rt;
+  auto count = [&](float x_lo, float x_hi) {  // remembered points of the front wall (|y| < 0.5 m) in [x_lo, x_hi]
+    int n = 0;
+    for (const Eigen::Vector2f& q : rt.explorer().recent_obstacles()) n += std::fabs(q.y()) < 0.5f && q.x() >= x_lo && q.x() <= x_hi;
+    return n;
+  };
+  r.run(0, 20);  // up to t = 0.95: the integration at t = 0 only - a cell needs two scans
+  EXPECT_EQ(rt.stats().sets_integrated, 1u);
+  EXPECT_TRUE(rt.explorer().recent_obstacles().empty());
+  r.run(20, 61);  // integrations at t = 1, 2, 3
+  ASSERT_GE(rt.stats().sets_integrated, 3u);
+  const auto& recent = rt.explorer().recent_obstacles();
+  ASSERT_FALSE(recent.empty());
+  for (const Eigen::Vector2f& q : recent) EXPECT_LE(q.norm(), 3.0f + 0.05f);  // within range (cell centres)
+  EXPECT_GT(count(1.80f, 1.95f), 10);
+  EXPECT_EQ(count(0.0f, 1.80f) + count(1.95f, 10.0f), 0);
+  int right_wall = 0;
+  for (const Eigen::Vector2f& q : recent) right_wall += std::fabs(q.y() + 2.0f) < 0.08f;
+  EXPECT_GT(right_wall, 10);
+  // One point per cell, at its centre.
+  std::vector<std::pair<int, int>> cells;
+  for (const Eigen::Vector2f& q : recent) {
+    const int cx = static_cast<int>(std::floor(q.x() / 0.05f)), cy = static_cast<int>(std::floor(q.y() / 0.05f));
+    EXPECT_NEAR(q.x(), (cx + 0.5f) * 0.05f, 1e-4f);
+    EXPECT_NEAR(q.y(), (cy + 0.5f) * 0.05f, 1e-4f);
+    cells.emplace_back(cx, cy);
+  }
+  std::sort(cells.begin(), cells.end());
+  EXPECT_EQ(std::unique(cells.begin(), cells.end()), cells.end());
+  // The correction moves the pose 1 m forward: old and new points agree at x = 2.882 m.
+  r.rt.override_pose(duet::Pose2{1.0f, 0.0f, 0.0f});
+  r.run(61, 81);  // one more integration at t = 4
+  EXPECT_GT(count(2.80f, 2.95f), 10);
+  EXPECT_EQ(count(0.0f, 2.80f) + count(2.95f, 10.0f), 0);
+  // The map still holds the wall where it was first seen.
+  const duet::OccupancyGrid& g = r.rt.mapper().grid();
+  const Eigen::Vector2i first = g.cell_of(Eigen::Vector2f(1.875f, 0.0f));
+  EXPECT_GE(g.logodds()[g.index(first.x(), first.y())], r.profile.exploration.cells.occupied_logodds);
+  // The front wall moves out of range: remembered for 3 s, then forgotten.
+  r.front_depth = 4.0f;
+  r.run(81, 101);  // t = 5: the scans of t = 2..4 are still within 3 s
+  EXPECT_GT(count(2.80f, 2.95f), 10);
+  r.run(101, 181);  // t = 9: only scans of t = 6..9 (front wall beyond 3 m)
+  EXPECT_EQ(count(-10.0f, 10.0f), 0);
+  EXPECT_FALSE(rt.explorer().recent_obstacles().empty());  // the right wall, still near
+}
+
+TEST(ExplorationRuntime, NoRecentObstaclesWhenTheWindowIsZero) {
+  StandingRobot r(one_hertz(0.0f));
+  r.run(0, 61);
+  EXPECT_GE(r.rt.stats().sets_integrated, 3u);
+  EXPECT_FALSE(r.rt.mapper().last_obstacles().empty());
+  EXPECT_TRUE(r.rt.explorer().recent_obstacles().empty());
+  EXPECT_EQ(r.rt.explorer().stats().recent_obstacle_cells, 0u);
 }
 
 TEST(ExplorationRuntime, ASilentSensorIsCountedNotFatal) {

@@ -288,6 +288,176 @@ TEST(Explorer, StallPutsAContactObstacleAheadAndAbandonsTheGoal) {
             0.3f);
 }
 
+// One 20 Hz control period on a perfect chassis (the command becomes the twist), the map given
+// again once a second (period k % 20 == 0).
+void perfect_step(duet::Explorer& e, const duet::OccupancyGrid& g, duet::Pose2& robot, duet::Twist& current, int k, double t) {
+  if (k % 20 == 0) e.update_map(g, robot, t);
+  const duet::Twist cmd = e.control(robot, current, t);
+  robot.x += cmd.v * 0.05f * std::cos(robot.theta);
+  robot.y += cmd.v * 0.05f * std::sin(robot.theta);
+  robot.theta = std::remainder(robot.theta + cmd.omega * 0.05f, 2.0f * 3.14159265f);
+  current = cmd;
+}
+
+// Recent obstacles: the map has seen a corridor free many times (log-odds at the -2.0 clamp) but
+// the latest observations put a wall across it - as when the pose estimate has moved since the
+// corridor was mapped. The dynamic window's grid blocks the recent obstacle cells at once, except
+// cells within one cell of an obstacle of the map (the inflation's margin holds them); the
+// planning grid and the stored map are not changed; the counter counts the cells marked, bad
+// points are skipped. The robot (a perfect chassis) drives towards the frontier beyond and stops
+// short of the wall (the goal stays: its path is on the planning grid); with no recent obstacles
+// any more it goes on through.
+TEST(Explorer, RecentObstaclesStopTheDynamicWindowWhereTheMapSeesFree) {
+  const duet::Profile p = frontier_only_profile();
+  duet::Explorer e(p);
+  duet::OccupancyGrid g = half_known_room();
+  g.logodds()[g.index(40, 0)] = 3.5f;  // one cell the map already holds as an obstacle
+  duet::Pose2 robot{1.0f, 1.5f, 0.0f};
+  std::vector<Eigen::Vector2f> wall;
+  for (int y = 0; y < g.height(); ++y) wall.push_back(g.cell_center(40, y));  // x = 2.025 m, the whole width
+  wall.emplace_back(std::numeric_limits<float>::quiet_NaN(), 1.0f);  // skipped
+  wall.emplace_back(50.0f, 50.0f);                                   // outside the grid: ignored
+  e.set_recent_obstacles(wall);
+  EXPECT_EQ(e.recent_obstacles().size(), wall.size() - 1);
+  e.update_map(g, robot, 0.0);
+  for (int y = 0; y < g.height(); ++y) {
+    const std::size_t i = e.local_grid().index(40, y);
+    // (40, 0) is the map's own obstacle; (40, 1) is next to it: not marked, blocked by inflation.
+    const auto expected = y == 1 ? duet::CellState::kFree : duet::CellState::kOccupied;
+    EXPECT_EQ(e.local_grid().state[i], expected) << y;
+    EXPECT_EQ(e.local_grid().traversable[i], 0) << y;
+    EXPECT_EQ(e.local_grid().traversable[e.local_grid().index(38, y)], 0) << y;  // inflated
+    if (y > 0) {
+      EXPECT_EQ(e.inflated().state[i], duet::CellState::kFree) << y;  // planning: the map
+    }
+  }
+  EXPECT_EQ(e.stats().recent_obstacle_cells, static_cast<std::size_t>(g.height() - 2));  // per update
+  EXPECT_EQ(g.logodds()[g.index(40, 30)], -2.0f);  // the map itself is the caller's, unchanged
+  // Drive for 10 s (perfect chassis, map updates at 1 Hz with the same recent wall).
+  auto drive = [&](double t0, double seconds, bool wall_there) {
+    duet::Twist current{};
+    for (int k = 0; k < static_cast<int>(seconds * 20.0); ++k) {
+      const double t = t0 + 0.05 * k;
+      perfect_step(e, g, robot, current, k, t);
+      if (wall_there) {
+        EXPECT_LT(robot.x, 2.0f - p.chassis.radius_m) << t;  // never into the wall cells (x >= 2.0)
+      }
+    }
+  };
+  drive(0.0, 10.0, true);
+  EXPECT_GT(robot.x, 1.3f);  // it did drive towards the frontier
+  EXPECT_LE(robot.x, 2.0f - p.exploration.dwa.robot_radius_m + 0.05f);  // and stopped at the margin
+  // Nothing recent any more: the corridor is free again from the next map update on.
+  e.set_recent_obstacles({});
+  e.update_map(g, robot, 10.0);
+  EXPECT_EQ(e.local_grid().state[e.local_grid().index(40, 30)], duet::CellState::kFree);
+  EXPECT_EQ(e.stats().recent_obstacle_cells, 11u * static_cast<std::size_t>(g.height() - 2));  // 1 + 10 updates with the wall
+  drive(10.0, 20.0, false);
+  EXPECT_GT(robot.x, 2.5f);
+}
+
+// Cornered (ExplorerSettings::cornered_after_s). The map around the robot on Willow seed 4 at
+// 400 s, where it spun for 3300 s (from a debugging dump of the run, 2 m x 2 m, north up,
+// 'M' occupied, 'U' not seen (here: occupied), 'u' uncertain, else free; '@' the robot, '*' its
+// path, ',' free cells the dynamic window's radius does not fit on). The robot stands on a bump
+// of the band it fits in (0.292 m of clearance for 0.29 m needed) with its path going south from
+// the cell west of it; spinning, every forward motion the window can reach leaves the band, so it
+// turns on (creeping at 3 mm/s) for ever. Below the map a strip never seen: the frontier.
+duet::OccupancyGrid willow_corner() {
+  static const char* const kRows[41] = {
+      "UUUUUUUUUUUUUU,,,,,,..............,,,,,,,",
+      "UUUUUUUUUUUUUUU,,,,,,,...........,,,,,,,,",
+      "UUUUUUUUUUUUUUU,,,,,,,.........,,,,,,,,,U",
+      "UUUUUUUUUUUUUUU,,,,,,,,.......,,,,,,,,,UU",
+      "UUUUUUUUUUUUUUUU,M,,,,,......,,,,,,,,,UUU",
+      "UUUUUUUUUUUUUUUU,M,,,,,....,,,,,,,,,,UUUU",
+      "UUUUUUUUUUUUUUUU,M,,,,,..,,,,,,,,,,UUUUUU",
+      "UUUUUUUUUUUUMMMMMM,,,,,,,,,,,,,,,,UUUUUUU",
+      "UUUUUUUUUUUUMMMMMM,,,,,,,,,,,,,,,UUUUUUUU",
+      "UUUUUUUUUUUUMMMMMM,,,,,,,,,,,,,UUUUUUUUUU",
+      "UUUUUUUUUUUUMM,,,,,,,,,,,,,,,,UUUUUUUUUUU",
+      "UUUUUUUUUUUMMM,,,,,,,,,,,,,M,UUUUUUUUUUUU",
+      "UUUUUUUUUUMMMM,,,,,,,,,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUUUUUMMMM,,,,,,,,,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUUUUUMM,,,,,,,,..,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUUUUUMM,,,,,,,...,,,,,MMMUUUUUUUUUUU",
+      "UUUUUUUUMMMM,,,,,,....,,,,,,,MUUUUUUUUUUU",
+      "UUUUUUUUMMMM,,,,,,....,,,,,,,MUUUUUUUUUUU",
+      "UUUUUUUUMM,,,,,,,.....,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUUUMM,,,,,,,....,,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUUUMM,,,,,,...*@,,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUUUMM,,,,,,...*,,,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUUMMM,,,,,....*,,,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUMM,M,,,,,....*,,,,,MuMMUMMUUUUMMMMU",
+      "UUUUUUMM,,,,,,,....*,,,,,uMMMMMMMMMMMMMMM",
+      "UUUUUUMM,,,,,,,....*,,,,,,MMMMMMMMMMMMMMM",
+      "UUUUUM,M,,,,,,.....*,,,,,,MMMMMMMMMMMMMMM",
+      "UUUUMM,M,,,,,,.....*.,,,,M,MMMMMMMMMMMMMM",
+      "UUUUMM,,,,,,,......*.,,,,,,,,,,,,,,,,,,,,",
+      "UUUUMM,,,,,,,......*..,,,,,,,,,,,,,,,,,,,",
+      "UUUUMM,,,,,,........*.,,,,,,,,,,,,,,,,,,,",
+      "UUMM,M,,,,,,,,.......*.,,,,,,,,,,,,,,,,,,",
+      "UUMM,,,,,,,,,,,,......*..,,,,,,,,,,,,,,,,",
+      "UUMM,,,,,,,,,,,,,,.....*.................",
+      "UUUM,,,,,,,,,,,,,,,,....*................",
+      "UUUM,MMMMM,,,,,,,,,,,,...*...............",
+      "UU,MM,UUUM,,,,,,,,,,,,....**.............",
+      "U,MM,UUUUMMMMM,,,,,,,,,,....**...........",
+      "UuMM,UUUUUUUUM,,,M,,,,,,......**.........",
+      "UMM,UUUUUUUUUMMMMM,,,,,,,,......*********",
+      "UMMUUUUUUUUUUUUUU,,,,,,,,,...............",
+  };
+  constexpr int kExtra = 4;  // unknown rows below
+  duet::OccupancyGrid g(kRes, Eigen::Vector2f(0.0f, 0.0f), 41, 41 + kExtra);
+  for (int r = 0; r < 41; ++r)
+    for (int c = 0; c < 41; ++c) {
+      const char ch = kRows[r][c];
+      g.logodds()[g.index(c, 40 - r + kExtra)] = ch == 'M' || ch == 'U' ? 3.5f : ch == 'u' ? 0.0f : -2.0f;
+    }
+  for (int y = 0; y < kExtra; ++y)
+    for (int x = 0; x < 41; ++x) g.logodds()[g.index(x, y)] = std::numeric_limits<float>::quiet_NaN();
+  return g;
+}
+
+// Drives the explorer on the map for `seconds` with a perfect chassis (the command is the next
+// twist), from the spot and the spin of the Willow run; returns the final pose.
+duet::Pose2 drive_from_the_corner(duet::Explorer& e, const duet::OccupancyGrid& g, double seconds, float* min_clearance) {
+  duet::Pose2 robot{g.cell_center(20, 24).x(), g.cell_center(20, 24).y(), -0.16f};
+  duet::Twist current{0.0f, -0.8f};
+  *min_clearance = std::numeric_limits<float>::infinity();
+  double t = 0.0;
+  for (int k = 0; t < seconds; ++k) {
+    perfect_step(e, g, robot, current, k, t);
+    t += 0.05;
+    const Eigen::Vector2i c = e.inflated().cell_of(Eigen::Vector2f(robot.x, robot.y));
+    *min_clearance = std::min(*min_clearance, e.inflated().clearance_m[e.inflated().index(c.x(), c.y())]);
+  }
+  return robot;
+}
+
+TEST(Explorer, CorneredRobotEscapesTowardsMoreClearance) {
+  const duet::Profile p = frontier_only_profile();
+  const duet::OccupancyGrid g = willow_corner();
+  const Eigen::Vector2f start = g.cell_center(20, 24);
+  float min_clearance = 0.0f;
+  {  // Without the escape (the default, 0 = off): 60 s on the spot.
+    duet::Explorer e(p);
+    const duet::Pose2 end = drive_from_the_corner(e, g, 60.0, &min_clearance);
+    EXPECT_LT((Eigen::Vector2f(end.x, end.y) - start).norm(), 0.1f);
+    EXPECT_EQ(e.stats().goals_reached, 0);
+    EXPECT_EQ(e.stats().cornered_escapes, 0);
+  }
+  // With it (8 s): out after the first 8 s, then on to the frontier.
+  duet::ExplorerSettings s;
+  s.cornered_after_s = 8.0f;
+  duet::Explorer e(p, s);
+  const duet::Pose2 end = drive_from_the_corner(e, g, 60.0, &min_clearance);
+  EXPECT_GT(e.stats().cornered_escapes, 0);
+  EXPECT_GE(e.stats().goals_reached, 1);
+  EXPECT_GT((Eigen::Vector2f(end.x, end.y) - start).norm(), 0.3f);
+  EXPECT_GT(min_clearance, p.chassis.radius_m);  // never touched anything on the way
+}
+
 // A room whose east wall (x = 2 m) has a one-cell gap; through it the sensors saw a one-cell-wide
 // line of free cells 1.2 m long (a room beyond, seen through a crack), unknown all around it: a
 // frontier the robot can never stand on. View goals: the robot goes to a cell of the room with a
@@ -431,16 +601,34 @@ TEST(Explorer, InvalidStandoffSearchThrows) {
     duet::ExplorerSettings vm;
     vm.view_min_range_m = bad;  // -0.1, 5.5 > view_range_m = 4, NaN
     EXPECT_THROW(duet::Explorer(p, vm), duet::Error) << bad;
+    duet::ExplorerSettings ro;
+    ro.recent_obstacles_s = bad < 0.0f || std::isnan(bad) ? bad : 3601.0f;
+    EXPECT_THROW(duet::Explorer(p, ro), duet::Error) << bad;
+    duet::ExplorerSettings rr;
+    rr.recent_obstacle_range_m = bad < 0.0f || std::isnan(bad) ? bad : 0.0f;
+    EXPECT_THROW(duet::Explorer(p, rr), duet::Error) << bad;
+    duet::ExplorerSettings co;
+    co.cornered_after_s = bad < 0.0f || std::isnan(bad) ? bad : std::numeric_limits<float>::infinity();  // 0 = off is valid
+    EXPECT_THROW(duet::Explorer(p, co), duet::Error) << bad;
+  }
+  // Integer settings out of range: the error names the field.
+  auto expect_error_naming = [&](const duet::ExplorerSettings& bad, const char* name) {
+    try {
+      duet::Explorer e(p, bad);
+      ADD_FAILURE() << name;
+    } catch (const duet::Error& err) {
+      EXPECT_NE(std::string(err.what()).find(name), std::string::npos) << err.what();
+    }
+  };
+  for (const int scans : {0, 1001}) {
+    duet::ExplorerSettings rs;
+    rs.recent_obstacle_min_scans = scans;
+    expect_error_naming(rs, "recent_obstacle_min_scans");
   }
   for (const int rays : {3, 3601}) {
     duet::ExplorerSettings v;
     v.view_rays = rays;
-    try {
-      duet::Explorer bad_rays(p, v);
-      ADD_FAILURE() << rays;
-    } catch (const duet::Error& err) {
-      EXPECT_NE(std::string(err.what()).find("view_rays"), std::string::npos) << err.what();
-    }
+    expect_error_naming(v, "view_rays");
   }
 }
 

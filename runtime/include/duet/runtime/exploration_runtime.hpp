@@ -136,6 +136,10 @@ class ExplorationRuntime {
   /// Scan-to-map match of the frames' obstacle points around `prior`; updates correction_ from
   /// `odom` when accepted and returns the pose to integrate at.
   Pose2 correct(std::span<const SensorFrame> frames, const Pose2& odom, Pose2 prior, double t);
+  /// Keeps the mapper's latest obstacle points near the robot in the odometry frame (they were
+  /// integrated at `at`, the odometry said `odom`), forgets those older than the explorer's
+  /// recent_obstacles_s, and hands the rest to the explorer in the map frame of `at`'s correction.
+  void remember_obstacles(const Pose2& at, const Pose2& odom, double t);
 
   Profile profile_;
   RuntimeSettings settings_;
@@ -164,6 +168,14 @@ class ExplorationRuntime {
   bool have_reference_ = false; ///< distance_ holds a reference
   OccupancyGrid pending_grid_;  ///< the grid copied at pending_t_ (the next reference)
   double pending_t_ = -1.0;     ///< when pending_grid_ was copied [s] (-1: never)
+  struct RecentScan {
+    double t = 0.0;                        ///< stamp of the frames [s]
+    std::vector<Eigen::Vector2f> points;   ///< obstacle points, one per grid cell, odometry frame
+  };
+  std::deque<RecentScan> recent_;          ///< see remember_obstacles()
+  std::vector<Eigen::Vector2f> recent_map_;  ///< scratch: their map-frame points
+  std::vector<std::uint64_t> recent_keys_;   ///< scratch: cells of one scan
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> recent_count_;  ///< scratch: (cell, scan) pairs
   Twist odom_twist_;
   Twist last_cmd_;
   std::optional<Pose2> pose_override_;

@@ -25,7 +25,8 @@
 ///    back to the global grid for that period (counted in stats().local_fallbacks); when nothing
 ///    is admissible there either (the robot is inside the margin: a map update brought an
 ///    obstacle nearer), it escapes forward - turn towards more clearance, creep at 0.1 m/s -
-///    because both sensors look forward/right and reversing is blind (stats().escapes).
+///    because both sensors look forward/right and reversing is blind (stats().escapes); so does a
+///    robot the window keeps on one spot for cornered_after_s (stats().cornered_escapes).
 ///  - a goal is a place the dynamic window can stand on its own grid: a goal (simulated or
 ///    frontier) whose cell lies within the dynamic window's radius of an unknown cell is moved
 ///    to the nearest cell, at most goal_standoff_search_m away, that is traversable on the
@@ -56,7 +57,9 @@
 #include <duet/kernels/path.hpp>
 #include <duet/runtime/profile.hpp>
 
+#include <limits>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -123,6 +126,38 @@ struct ExplorerSettings {
   /// range (0.5 m) plus the sensor's offset behind the robot's centre.
   float view_min_range_m = 0.8f;
   int view_rays = 72;  ///< directions cast from each frontier cell (evenly over 360 deg), [4, 3600]
+  /// Recent obstacles: every grid cell an obstacle point of the last recent_obstacles_s seconds
+  /// of observations fell in blocks the dynamic window's grid (local_grid()), whatever the map's
+  /// log-odds say; the planning grid keeps the map (a path the window cannot follow ends in the
+  /// stuck timeout and the goal is abandoned) (set_recent_obstacles(); the runtime keeps the points in the odometry frame,
+  /// which is exact relative to the robot over seconds, and places them with the current pose
+  /// correction). Why: where the pose estimate has moved since a place was mapped, a cell the
+  /// map has seen free many times (log-odds at the -2.0 clamp) needs three hits (3 s at 1 Hz)
+  /// before it blocks, while the robot drives into what the sensors show there (Willow seed 6:
+  /// the map 0.22 m off the pose, a wall corner seen as it approached, the cells still free).
+  /// Cells within one cell of an obstacle of the map are not marked: the inflation's margin (a
+  /// cell) holds them, and marking them would thicken walls by the sensors' noise (a narrow
+  /// corridor closed so, Willow seed 6). The map itself is not changed (the observation model
+  /// and the stored grid keep the log-odds); this is the obstacle layer of a robot's local
+  /// costmap (nav2, move_base). [s], [0, 3600]; 0 = off (the default: on Willow it avoided
+  /// some collisions and caused others, see bench/RESULTS.md; 20 s is the value measured).
+  float recent_obstacles_s = 0.0f;
+  /// ... only points within this distance of the robot when seen [m], (0, 10]: near points are
+  /// precise (the Kinect's axial noise is 1 cm at 3 m, 4 cm at 5 m) and those are the ones to avoid.
+  float recent_obstacle_range_m = 3.0f;
+  /// ... only cells seen as an obstacle in at least this many of the window's scans, [1, 1000]:
+  /// a single noisy return does not block (the runtime counts them, see remember_obstacles).
+  int recent_obstacle_min_scans = 2;
+  /// Cornered: the dynamic window has kept the robot within 0.1 m of one spot (turning in place,
+  /// or creeping at a few mm/s while it spins) for this long [s], (0, inf): it escapes towards
+  /// more clearance as when it is inside the margin (stats().cornered_escapes), until it is out of
+  /// that spot. Without it a robot at the very edge of the traversable band spins for ever (every
+  /// forward motion reachable from the spin leaves the band, and turning on keeps the score) until
+  /// the goal times out, and the next goal the same - for 3300 s on Willow seed 4.
+  /// [s], [0, inf); 0 = off (the default: measured on Willow it freed seed 4 but the runs of
+  /// seeds 5 and 6 then ended early, see bench/RESULTS.md); 8 s, more than a whole turn at the
+  /// mapping's angular speed (2 pi / 0.8 rad/s = 7.9 s), is the value measured.
+  float cornered_after_s = 0.0f;
 };
 void validate(const ExplorerSettings& s);
 
@@ -145,6 +180,7 @@ struct ExplorerStats {
   int replans = 0;
   int local_fallbacks = 0;          ///< control periods the dynamic window fell back to the global grid
   int escapes = 0;                  ///< control periods spent escaping the dynamic window's margin
+  int cornered_escapes = 0;         ///< control periods spent escaping a spot (ExplorerSettings::cornered_after_s)
   int goals_moved = 0;              ///< goals moved off cells next to unknown space (decisions and re-checks)
   /// Frontier goals found on a relaxed grid (the squeezed radius; when boxed in, observed-but-
   /// uncertain cells not blocking either) after the search on the planning grid reached none.
@@ -153,6 +189,10 @@ struct ExplorerStats {
   int stalls = 0;                   ///< stalls detected (ExplorerSettings::stall_timeout_s): contact obstacles placed
   int view_goals = 0;               ///< view goals taken (ExplorerSettings::view_range_m)
   int view_goals_reached = 0;       ///< of view_goals, those reached and looked from
+  /// Sum over map updates of the cells the recent obstacles made blocking: cells with no
+  /// obstacle of the map within one cell (ExplorerSettings::recent_obstacles_s) - how far the
+  /// map lagged behind what the sensors showed.
+  std::size_t recent_obstacle_cells = 0;
   double decision_time_sum_s = 0.0;
   double decision_time_max_s = 0.0;
 };
@@ -183,6 +223,12 @@ class Explorer {
   /// The latest map (1 Hz): rebuilds the observation model and the inflated grid, re-plans the
   /// current goal's path. `now_s` is the runtime clock.
   void update_map(const OccupancyGrid& grid, const Pose2& robot, double now_s);
+
+  /// The recent obstacle points (map frame xy; ExplorerSettings::recent_obstacles_s), used from
+  /// the next update_map() on until replaced. Non-finite points are skipped; points outside the
+  /// map's grid are ignored. The runtime calls it before every update_map().
+  void set_recent_obstacles(std::span<const Eigen::Vector2f> points);
+  [[nodiscard]] const std::vector<Eigen::Vector2f>& recent_obstacles() const noexcept { return recent_; }
 
   /// One control period (20 Hz): takes a decision if needed, then the dynamic window's command.
   /// `current` is the chassis' twist (odometry). Returns a zero twist when idle or done.
@@ -215,11 +261,15 @@ class Explorer {
   Twist control_step(const Pose2& robot, const Twist& current, double now_s);
   /// Sets the cells within contact_radius_m of every contact to occupied.
   void mark_contacts(OccupancyGrid& g) const;
+  void mark_recent(OccupancyGrid& g);  // counts the cells it marks (stats)
   bool plan(const Pose2& robot);
   void abandon(int& counter, double now_s);
   /// Forgets the current goal, its path and its modes (relaxed, view) and resets the dynamic window.
   void drop_goal();
-  [[nodiscard]] std::optional<Twist> escape(const Pose2& robot, const Twist& current) const;
+  /// Turn towards the largest clearance of `g` 2 cells away, then creep at 0.1 m/s; nullopt when
+  /// no such cell has more clearance than the robot's, or (not cornered) the robot is outside
+  /// the dynamic window's margin.
+  [[nodiscard]] std::optional<Twist> escape(const Pose2& robot, const Twist& current, const InflatedGrid& g, bool cornered) const;
   /// The dynamic window's radius + safety margin [m] (of dwa_settings()).
   [[nodiscard]] float dwa_clearance() const;
   /// The profile's dynamic window settings, with the relaxed radius while a relaxed goal is active.
@@ -258,7 +308,12 @@ class Explorer {
   OccupancyGrid local_grid_{0.05f};
   std::vector<Eigen::Vector2f> trail_;  ///< robot positions, 0.05 m apart
   std::vector<Eigen::Vector2f> contacts_;  ///< see contacts()
+  std::vector<Eigen::Vector2f> recent_;    ///< see recent_obstacles()
+  std::vector<std::size_t> recent_cells_;  ///< scratch of mark_recent()
   OccupancyGrid contact_grid_{0.05f};      ///< the latest map with the contacts marked (when there are any)
+  bool marked_ = false;
+  float cornered_s_ = 0.0f;                ///< how long the window has kept the robot near cornered_at_ (cornered_after_s)
+  Eigen::Vector2f cornered_at_{std::numeric_limits<float>::infinity(), 0.0f};                    ///< contact_grid_ is the grid of the latest update_map()
   Twist last_cmd_;                         ///< the last command control() returned
   double stall_since_s_ = -1.0;
   GoalBlacklist blacklist_;

@@ -46,6 +46,9 @@ class Mapper {
   /// The global cloud (map frame), voxel-filtered at the mapping leaf size, with colours.
   [[nodiscard]] const PointCloud& cloud();
   [[nodiscard]] const OccupancyGrid& grid() const noexcept { return grid_; }
+  /// The points of the last integrate() labelled obstacle - the ones that marked the grid - as
+  /// map-frame xy, after the per-frame voxel filter, all frames (empty before the first call).
+  [[nodiscard]] const std::vector<Eigen::Vector2f>& last_obstacles() const noexcept { return obstacles_; }
   [[nodiscard]] const MapperStats& stats() const noexcept { return stats_; }
   [[nodiscard]] const MappingSettings& settings() const noexcept { return settings_; }
   [[nodiscard]] const Eigen::Isometry3f& T_map_world() const noexcept { return T_map_world_; }
@@ -62,6 +65,7 @@ class Mapper {
   // Reused scratch.
   PointCloud raw_, filtered_;
   std::vector<PointLabel> labels_;
+  std::vector<Eigen::Vector2f> obstacles_;
   std::vector<std::size_t> offsets_;
   VoxelFilterWorkspace vf_ws_;
   GridUpdateWorkspace grid_ws_;
