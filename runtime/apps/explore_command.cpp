@@ -40,6 +40,8 @@ struct ExploreOptions {
   bool raw_odometry = false;
   float recent_obstacles_s = 0.0f;
   float cornered_after_s = 0.0f;
+  float slow_clearance_m = -1.0f;  // < 0: the explorer's default
+  float slow_speed_mps = -1.0f;
   bool quiet = false;
 };
 
@@ -101,6 +103,7 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                 {"dwa_local_fallbacks", e.local_fallbacks},
                 {"escapes", e.escapes},
                 {"cornered_escapes", e.cornered_escapes},
+                {"slowed_periods", e.slowed},
                 {"goals_moved", e.goals_moved},
                 {"relaxed_goals", e.relaxed_goals},
                 {"boxed_in_goals", e.boxed_in_goals},
@@ -252,6 +255,8 @@ int run_explore(const ExploreOptions& o) {
   es.pose_correction.enabled = !o.raw_odometry;
   es.explorer.recent_obstacles_s = o.recent_obstacles_s;
   es.explorer.cornered_after_s = o.cornered_after_s;
+  if (o.slow_clearance_m >= 0.0f) es.explorer.slow_clearance_m = o.slow_clearance_m;
+  if (o.slow_speed_mps >= 0.0f) es.explorer.slow_speed_mps = o.slow_speed_mps;
   const bool tty = stderr_is_tty() && !o.quiet;
   tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
   arena.execute([&] {
@@ -378,6 +383,9 @@ void add_explore_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--cornered-after", o->cornered_after_s,
                   "EXPERIMENTAL: escape a spot the dynamic window keeps the robot on this long [s] (ExplorerSettings::cornered_after_s; 0 = off)")
       ->capture_default_str();
+  cmd->add_option("--slow-clearance", o->slow_clearance_m,
+                  "slow zone: below this clearance [m] the top speed falls towards --slow-speed (ExplorerSettings::slow_clearance_m; 0 = off)");
+  cmd->add_option("--slow-speed", o->slow_speed_mps, "slow zone: top speed at the dynamic window's margin [m/s] (ExplorerSettings::slow_speed_mps)");
   cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
   cmd->callback([o, &exit_code] { exit_code = run_explore(*o); });

@@ -85,6 +85,10 @@ void validate(const ExplorerSettings& s) {
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::recent_obstacle_min_scans must be in [1, 1000], got " + std::to_string(s.recent_obstacle_min_scans));
   if (!(std::isfinite(s.cornered_after_s) && s.cornered_after_s >= 0.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::cornered_after_s must be in [0, inf) s (0 = off), got " + std::to_string(s.cornered_after_s));
+  if (!(s.slow_clearance_m >= 0.0f && s.slow_clearance_m <= 10.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::slow_clearance_m must be in [0, 10] m (0 = off), got " + std::to_string(s.slow_clearance_m));
+  if (!(std::isfinite(s.slow_speed_mps) && s.slow_speed_mps > 0.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::slow_speed_mps must be in (0, inf) m/s, got " + std::to_string(s.slow_speed_mps));
   if (s.final_retries < 0 || s.final_retries > 1000)
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::final_retries must be in [0, 1000], got " + std::to_string(s.final_retries));
 }
@@ -311,6 +315,21 @@ DwaSettings Explorer::dwa_settings() const {
 float Explorer::dwa_clearance() const {
   const DwaSettings ds = dwa_settings();
   return ds.robot_radius_m + ds.safety_margin_m;
+}
+
+float Explorer::speed_limit(const Pose2& robot, const DwaSettings& ds) const {
+  const float v_max = ds.limits.max_v_mps;
+  if (settings_.slow_clearance_m <= 0.0f) return v_max;
+  const float v_slow = std::min(settings_.slow_speed_mps, v_max);
+  const InflatedGrid& g = planning_grid();
+  Eigen::Vector2i c;
+  if (!g.cell_of(Eigen::Vector2f(robot.x, robot.y), c)) return v_slow;  // off the map: nothing known
+  const float clear = g.clearance_m[g.index(c.x(), c.y())];
+  const float margin = ds.robot_radius_m + ds.safety_margin_m;
+  if (!(clear < settings_.slow_clearance_m)) return v_max;  // also +inf (no obstacle at all)
+  if (!(settings_.slow_clearance_m > margin) || clear <= margin) return v_slow;
+  const float u = (clear - margin) / (settings_.slow_clearance_m - margin);
+  return v_slow + (v_max - v_slow) * u;
 }
 
 bool Explorer::can_stand_on(int x, int y) const {
@@ -541,7 +560,10 @@ Twist Explorer::control_step(const Pose2& robot, const Twist& current, double no
     abandon(stats_.goals_abandoned_timeout, now_s);
     return Twist{};
   }
-  const DwaSettings ds = dwa_settings();
+  DwaSettings ds = dwa_settings();
+  const float v_limit = speed_limit(robot, ds);
+  if (v_limit < ds.limits.max_v_mps) ++stats_.slowed;
+  ds.limits.max_v_mps = v_limit;
   const DwaState before = dwa_state_;
   DwaResult r = dwa_step(local_.clearance(), robot, current, path_, ds, dwa_state_, dwa_ws_);
   bool fell_back = false;

@@ -356,6 +356,79 @@ TEST(Explorer, RecentObstaclesStopTheDynamicWindowWhereTheMapSeesFree) {
   EXPECT_GT(robot.x, 2.5f);
 }
 
+// Slow zone (ExplorerSettings::slow_clearance_m): along a corridor 1.1 m wide (walls 0.5 m from
+// the robot's centre line) the dynamic window's top speed is the linear interpolation between
+// slow_speed_mps at its margin and the profile's max_v_mps at slow_clearance_m; in the open (the
+// half-known room, no obstacle seen) and with the slow zone off it drives at the profile's speed.
+duet::OccupancyGrid corridor() {
+  duet::OccupancyGrid g(kRes, Eigen::Vector2f(0.0f, 0.0f), 200, 22);
+  for (int y = 0; y < g.height(); ++y)
+    for (int x = 0; x < 160; ++x) g.logodds()[g.index(x, y)] = (y == 0 || y == 21) ? 3.5f : -2.0f;
+  return g;
+}
+
+float top_speed(const duet::ExplorerSettings& s, const duet::OccupancyGrid& g, float y0, float& x_end, int& slowed) {
+  duet::Explorer e(frontier_only_profile(), s);
+  duet::Pose2 robot{0.6f, y0, 0.0f};
+  duet::Twist current{};
+  float top = 0.0f;
+  for (int k = 0; k < 200; ++k) {  // 10 s
+    perfect_step(e, g, robot, current, k, 0.05 * k);
+    top = std::max(top, current.v);
+  }
+  x_end = robot.x;
+  slowed = e.stats().slowed;
+  return top;
+}
+
+TEST(Explorer, SlowZoneLimitsTheSpeedNearObstacles) {
+  const duet::Profile p = frontier_only_profile();
+  const float v_max = p.exploration.dwa.limits.max_v_mps;
+  const float margin = needed_clearance(p);
+  duet::ExplorerSettings slow;
+  slow.slow_clearance_m = 0.8f;
+  slow.slow_speed_mps = 0.25f;
+  ASSERT_LT(margin, 0.5f);
+  // The centre line's cells are 0.5 m from the nearer wall's cell centres.
+  const float limit = slow.slow_speed_mps + (v_max - slow.slow_speed_mps) * (0.5f - margin) / (slow.slow_clearance_m - margin);
+  const duet::OccupancyGrid g = corridor();
+  float x_slow = 0.0f, x_fast = 0.0f, x_open = 0.0f;
+  int n_slow = 0, n_fast = 0, n_open = 0;
+  const float v_slow = top_speed(slow, g, 0.55f, x_slow, n_slow);
+  EXPECT_LE(v_slow, limit + 1e-4f);
+  EXPECT_GT(v_slow, limit - 0.03f);  // it did speed up to the limit
+  EXPECT_GT(x_slow, 2.5f);           // and drove down the corridor
+  duet::ExplorerSettings off;
+  off.slow_clearance_m = 0.0f;
+  const float v_fast = top_speed(off, g, 0.55f, x_fast, n_fast);
+  EXPECT_GT(v_fast, v_max - 0.03f);
+  EXPECT_GT(x_fast, x_slow + 0.5f);
+  const float v_open = top_speed(slow, half_known_room(), 1.5f, x_open, n_open);
+  EXPECT_GT(v_open, v_max - 0.03f);
+  EXPECT_GT(n_slow, 100);  // of 200 periods: every period it drove down the corridor
+  EXPECT_EQ(n_fast, 0);
+  EXPECT_EQ(n_open, 0);
+  // The default is on, with these values.
+  EXPECT_EQ(duet::ExplorerSettings{}.slow_clearance_m, slow.slow_clearance_m);
+  EXPECT_EQ(duet::ExplorerSettings{}.slow_speed_mps, slow.slow_speed_mps);
+  // Bad settings name the field.
+  for (const float bad : {-0.1f, 10.5f, std::numeric_limits<float>::quiet_NaN()}) {
+    duet::ExplorerSettings s;
+    s.slow_clearance_m = bad;
+    EXPECT_THROW(duet::Explorer(p, s), duet::Error) << bad;
+  }
+  for (const float bad : {0.0f, -0.2f, std::numeric_limits<float>::infinity()}) {
+    duet::ExplorerSettings s;
+    s.slow_speed_mps = bad;
+    try {
+      duet::Explorer e(p, s);
+      ADD_FAILURE() << bad;
+    } catch (const duet::Error& err) {
+      EXPECT_NE(std::string(err.what()).find("slow_speed_mps"), std::string::npos) << err.what();
+    }
+  }
+}
+
 // Cornered (ExplorerSettings::cornered_after_s). The map around the robot on Willow seed 4 at
 // 400 s, where it spun for 3300 s (from a debugging dump of the run, 2 m x 2 m, north up,
 // 'M' occupied, 'U' not seen (here: occupied), 'u' uncertain, else free; '@' the robot, '*' its

@@ -158,6 +158,22 @@ struct ExplorerSettings {
   /// seeds 5 and 6 then ended early, see bench/RESULTS.md); 8 s, more than a whole turn at the
   /// mapping's angular speed (2 pi / 0.8 rad/s = 7.9 s), is the value measured.
   float cornered_after_s = 0.0f;
+  /// Slow zone (nav2's speed filter, the collision monitor's slowdown zone): the dynamic
+  /// window's top speed falls with the robot's clearance on the planning grid (distance from
+  /// its centre to the nearest seen obstacle cell), linearly from the profile's max_v_mps at
+  /// slow_clearance_m down to slow_speed_mps at the window's own margin (robot radius + safety
+  /// margin) and below. Why: the map can lag behind the sensors where the pose estimate moved
+  /// since a place was mapped (a cell seen free many times needs three hits, 3 s at 1 Hz, to
+  /// block), and at 0.5 m/s a turn round a corner the map holds 0.2 m off is a collision (Willow
+  /// seed 6); slower near obstacles the sensors' new hits reach the map before the robot does,
+  /// while open space is still crossed at full speed. [m], [0, 10]; 0 = off. 0.8 m: half a metre
+  /// beyond the margin, so a corridor 1.6 m wide is crossed at full speed and a doorway slowly
+  /// (measured on Willow, 6 seeds: 1 collision against 4 without; see bench/RESULTS.md).
+  float slow_clearance_m = 0.8f;
+  /// ... the top speed at the margin [m/s], (0, inf) (above the profile's max_v_mps it changes
+  /// nothing). 0.25 m/s: half the paper's exploration speed; 0.75 m (three map updates' worth of
+  /// hits) takes 3 s.
+  float slow_speed_mps = 0.25f;
 };
 void validate(const ExplorerSettings& s);
 
@@ -181,6 +197,7 @@ struct ExplorerStats {
   int local_fallbacks = 0;          ///< control periods the dynamic window fell back to the global grid
   int escapes = 0;                  ///< control periods spent escaping the dynamic window's margin
   int cornered_escapes = 0;         ///< control periods spent escaping a spot (ExplorerSettings::cornered_after_s)
+  int slowed = 0;                   ///< control periods the slow zone lowered the top speed (ExplorerSettings::slow_clearance_m)
   int goals_moved = 0;              ///< goals moved off cells next to unknown space (decisions and re-checks)
   /// Frontier goals found on a relaxed grid (the squeezed radius; when boxed in, observed-but-
   /// uncertain cells not blocking either) after the search on the planning grid reached none.
@@ -272,6 +289,9 @@ class Explorer {
   [[nodiscard]] std::optional<Twist> escape(const Pose2& robot, const Twist& current, const InflatedGrid& g, bool cornered) const;
   /// The dynamic window's radius + safety margin [m] (of dwa_settings()).
   [[nodiscard]] float dwa_clearance() const;
+  /// The dynamic window's top speed at `robot` (ExplorerSettings::slow_clearance_m): `ds`'s max_v_mps
+  /// in open space, down to slow_speed_mps at the window's margin.
+  [[nodiscard]] float speed_limit(const Pose2& robot, const DwaSettings& ds) const;
   /// The profile's dynamic window settings, with the relaxed radius while a relaxed goal is active.
   [[nodiscard]] DwaSettings dwa_settings() const;
   /// min(profile's inflation radius, chassis radius + squeeze_margin_m) [m].
