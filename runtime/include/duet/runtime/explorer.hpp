@@ -168,7 +168,7 @@ struct ExplorerSettings {
   /// seed 6); slower near obstacles the sensors' new hits reach the map before the robot does,
   /// while open space is still crossed at full speed. [m], [0, 10]; 0 = off. 0.8 m: half a metre
   /// beyond the margin, so a corridor 1.6 m wide is crossed at full speed and a doorway slowly
-  /// (measured on Willow, 6 seeds: 1 collision against 4 without; see bench/RESULTS.md).
+  /// (measured on Willow, seeds 1-8: 4 collisions against 7 without; see bench/RESULTS.md).
   float slow_clearance_m = 0.8f;
   /// ... the top speed at the margin [m/s], (0, inf) (above the profile's max_v_mps it changes
   /// nothing). 0.25 m/s: half the paper's exploration speed; 0.75 m (three map updates' worth of
