@@ -42,6 +42,7 @@ struct ExploreOptions {
   float cornered_after_s = 0.0f;
   float slow_clearance_m = -1.0f;  // < 0: the explorer's default
   float slow_speed_mps = -1.0f;
+  float gyro_noise = 0.0f;
   bool quiet = false;
 };
 
@@ -257,6 +258,11 @@ int run_explore(const ExploreOptions& o) {
   es.explorer.cornered_after_s = o.cornered_after_s;
   if (o.slow_clearance_m >= 0.0f) es.explorer.slow_clearance_m = o.slow_clearance_m;
   if (o.slow_speed_mps >= 0.0f) es.explorer.slow_speed_mps = o.slow_speed_mps;
+  if (o.gyro_noise != 0.0f) {
+    es.chassis = sim::ChassisSimSettings::from_profile(profile.chassis);
+    es.chassis->gyro_heading = true;  // as the default chassis (the Kobuki's gyro heading)
+    es.chassis->gyro_noise_density = o.gyro_noise;
+  }
   const bool tty = stderr_is_tty() && !o.quiet;
   tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
   arena.execute([&] {
@@ -385,6 +391,9 @@ void add_explore_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--slow-clearance", o->slow_clearance_m,
                   "slow zone: below this clearance [m] the top speed falls towards --slow-speed (ExplorerSettings::slow_clearance_m; 0 = off)");
+  cmd->add_option("--gyro-noise", o->gyro_noise,
+                  "simulated gyro's rate-noise density [rad/s/sqrt(Hz)], [0, 0.01] (ChassisSimSettings::gyro_noise_density; 0 = none)")
+      ->capture_default_str();
   cmd->add_option("--slow-speed", o->slow_speed_mps, "slow zone: top speed at the dynamic window's margin [m/s] (ExplorerSettings::slow_speed_mps)");
   cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "no progress output");

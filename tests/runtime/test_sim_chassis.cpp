@@ -249,6 +249,62 @@ TEST(SimChassis, OdometryDriftsWithSlipAndNoiseWithinTheModelsBound) {
   EXPECT_GT(sum_pos / seeds, 0.05) << "odometry must drift from the truth";
 }
 
+// The gyro's white noise (ChassisSimSettings::gyro_noise_density): a robot standing still with the
+// gyro heading and no bias sees its odometry's heading do an angle random walk of std
+// density * sqrt(t). Over 32 seeds and 100 s the RMS heading error must be within [0.6, 1.5] of
+// that (a chi-square with 32 degrees of freedom is inside with probability > 0.999). Without the
+// noise it stays exactly 0; the true motion (driving) is the same with and without it.
+TEST(SimChassis, GyroNoiseIsAnAngleRandomWalk) {
+  constexpr float kDensity = 3e-4f;  // rad/s/sqrt(Hz)
+  constexpr double kT = 100.0;
+  double sum2 = 0.0;
+  constexpr int kSeeds = 32;
+  for (int seed = 1; seed <= kSeeds; ++seed) {
+    ChassisSimSettings s = ideal();
+    s.gyro_heading = true;
+    s.gyro_bias_std_radps = 0.0f;
+    s.gyro_noise_density = kDensity;
+    s.seed = static_cast<std::uint64_t>(seed);
+    SimChassis c(open_world(), s, Pose2{0.0f, 0.0f, 0.0f});
+    c.advance(kT);
+    const auto msgs = c.take_odometry();
+    ASSERT_FALSE(msgs.empty());
+    const double e = std::remainder(static_cast<double>(msgs.back().pose.theta), 2.0 * kPi);
+    EXPECT_EQ(c.true_pose().theta, 0.0f);
+    sum2 += e * e;
+  }
+  const double rms = std::sqrt(sum2 / kSeeds);
+  const double predicted = kDensity * std::sqrt(kT);  // 3 mrad = 0.17 deg
+  EXPECT_GT(rms, 0.6 * predicted);
+  EXPECT_LT(rms, 1.5 * predicted);
+  // No noise: exactly still.
+  ChassisSimSettings quiet = ideal();
+  quiet.gyro_heading = true;
+  quiet.gyro_bias_std_radps = 0.0f;
+  SimChassis still(open_world(), quiet, Pose2{0.0f, 0.0f, 0.0f});
+  still.advance(kT);
+  EXPECT_EQ(still.take_odometry().back().pose.theta, 0.0f);
+  // Driving: the truth does not depend on the gyro's noise (its own generator), the odometry does.
+  ChassisSimSettings noisy = ChassisSimSettings{};
+  noisy.gyro_heading = true;
+  ChassisSimSettings loud = noisy;
+  loud.gyro_noise_density = kDensity;
+  SimChassis a(open_world(), noisy, Pose2{0.0f, 0.0f, 0.0f}), b(open_world(), loud, Pose2{0.0f, 0.0f, 0.0f});
+  for (SimChassis* c : {&a, &b}) {
+    c->command({0.3f, 0.2f});
+    c->advance(20.0);
+  }
+  EXPECT_EQ(a.true_pose().x, b.true_pose().x);
+  EXPECT_EQ(a.true_pose().theta, b.true_pose().theta);
+  EXPECT_NE(a.take_odometry().back().pose.theta, b.take_odometry().back().pose.theta);
+  // Out of range: the error names the setting.
+  for (const float bad : {-1e-4f, 0.02f, std::numeric_limits<float>::quiet_NaN()}) {
+    ChassisSimSettings bs;
+    bs.gyro_noise_density = bad;
+    expect_invalid([&] { SimChassis(open_world(), bs, Pose2{}); }, "gyro_noise_density");
+  }
+}
+
 TEST(SimChassis, WheelBaseBiasScalesEveryRotationOfTheOdometry) {
   ChassisSimSettings s = ideal();
   s.wheel_base_bias = 0.005f;

@@ -68,6 +68,7 @@ void validate(const ChassisSimSettings& s) {
     bad(k, "wheel_slip_correlation_s", s.wheel_slip_correlation_s, "[0, 100]");
   if (!in_range(s.wheel_base_bias, -0.2, 0.2)) bad(k, "wheel_base_bias", s.wheel_base_bias, "[-0.2, 0.2]");
   if (!in_range(s.encoder_noise_m, 0.0, 0.01)) bad(k, "encoder_noise_m", s.encoder_noise_m, "[0, 0.01]");
+  if (!in_range(s.gyro_noise_density, 0.0, 0.01)) bad(k, "gyro_noise_density", s.gyro_noise_density, "[0, 0.01]");
   if (!in_range(s.gyro_bias_std_radps, 0.0, 0.1)) bad(k, "gyro_bias_std_radps", s.gyro_bias_std_radps, "[0, 0.1]");
   if (!in_range(s.contact_release_m, 0.0, 1.0)) bad(k, "contact_release_m", s.contact_release_m, "[0, 1]");
 }
@@ -115,6 +116,8 @@ SimChassis::SimChassis(std::shared_ptr<const World> world, const ChassisSimSetti
     const double u2 = static_cast<double>(g() >> 11) * 0x1p-53;
     gyro_bias_ = static_cast<float>(settings_.gyro_bias_std_radps * std::sqrt(-2.0 * std::log(u1)) *
                                     std::cos(6.283185307179586 * u2));
+    gyro_rng_.seed(settings_.seed ^ 0xD1B54A32D192ED03ull);
+    gyro_step_std_ = static_cast<float>(static_cast<double>(settings_.gyro_noise_density) / std::sqrt(h_));
   }
 }
 
@@ -185,7 +188,13 @@ void SimChassis::step() {
   // Measured wheel speeds and the nominal kinematics (what the robot's odometry computes).
   const float m_l = u_l + static_cast<float>(enc_std * n_enc_l / h_);
   const float m_r = u_r + static_cast<float>(enc_std * n_enc_r / h_);
-  const Twist measured{0.5f * (m_l + m_r), s.gyro_heading ? truth.omega + gyro_bias_ : (m_r - m_l) / b};
+  float gyro_noise = 0.0f;
+  if (gyro_step_std_ > 0.0f) {
+    const double u1 = (static_cast<double>(gyro_rng_() >> 11) + 1.0) * 0x1p-53;
+    const double u2 = static_cast<double>(gyro_rng_() >> 11) * 0x1p-53;
+    gyro_noise = gyro_step_std_ * static_cast<float>(std::sqrt(-2.0 * std::log(u1)) * std::cos(6.283185307179586 * u2));
+  }
+  const Twist measured{0.5f * (m_l + m_r), s.gyro_heading ? truth.omega + gyro_bias_ + gyro_noise : (m_r - m_l) / b};
 
   // 5. Paper Eq. (4) for the truth and for the odometry.
   const Pose2 next = motion_step(true_pose_, truth, h);

@@ -94,6 +94,13 @@ struct ChassisSimSettings {
   /// 8.7e-5 rad/s = 0.005 deg/s = 0.3 deg/min: a MEMS yaw gyro calibrated at rest at start-up
   /// (consumer MEMS bias instability is 0.003-0.01 deg/s).
   float gyro_bias_std_radps = 8.7e-5f;
+  /// The gyro's white rate noise, as a rate-noise density [rad/s/sqrt(Hz)], [0, 0.01]: each physics
+  /// step adds a draw of std density / sqrt(h) to the measured omega, so the heading does an angle
+  /// random walk of std density * sqrt(t). 0 = none (the default: the runs measured so far). A
+  /// consumer MEMS yaw gyro is of the order of 0.01-0.03 deg/s/sqrt(Hz) = 1.7e-4 - 5.2e-4 (0.6-1.8
+  /// deg after an hour). Drawn from the gyro's own generator: the wheels' noise stream and the
+  /// true motion do not change with it.
+  float gyro_noise_density = 0.0f;
   std::uint64_t seed = 1;                   ///< seeds the slip and encoder noise (and the gyro bias)
 
   /// The chassis profile's limits (max linear speed, 180 deg/s, wheel base, odometry rate), the
@@ -181,6 +188,8 @@ class SimChassis final : public ChassisInterface {
   Pose2 odom_pose_;
   double slip_l_ = 0.0, slip_r_ = 0.0;    ///< current slip of each wheel
   float gyro_bias_ = 0.0f;                ///< this run's gyro bias [rad/s]
+  std::mt19937_64 gyro_rng_;              ///< the gyro's white noise (gyro_noise_density)
+  float gyro_step_std_ = 0.0f;            ///< std of the gyro's rate noise per physics step [rad/s]
   double odom_dist_l_ = 0.0, odom_dist_r_ = 0.0;  ///< measured wheel travel this period [m]
   bool blocked_ = false;
   bool in_contact_ = false;
