@@ -391,10 +391,10 @@ void add_explore_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--slow-clearance", o->slow_clearance_m,
                   "slow zone: below this clearance [m] the top speed falls towards --slow-speed (ExplorerSettings::slow_clearance_m; 0 = off)");
+  cmd->add_option("--slow-speed", o->slow_speed_mps, "slow zone: top speed at the dynamic window's margin [m/s] (ExplorerSettings::slow_speed_mps)");
   cmd->add_option("--gyro-noise", o->gyro_noise,
                   "simulated gyro's rate-noise density [rad/s/sqrt(Hz)], [0, 0.01] (ChassisSimSettings::gyro_noise_density; 0 = none)")
       ->capture_default_str();
-  cmd->add_option("--slow-speed", o->slow_speed_mps, "slow zone: top speed at the dynamic window's margin [m/s] (ExplorerSettings::slow_speed_mps)");
   cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
   cmd->callback([o, &exit_code] { exit_code = run_explore(*o); });

@@ -10,6 +10,13 @@
 namespace duet::sim {
 namespace {
 
+/// A standard normal draw: Box-Muller on 53-bit uniforms (portable across libraries).
+double standard_normal(std::mt19937_64& g) {
+  const double u1 = (static_cast<double>(g() >> 11) + 1.0) * 0x1p-53;  // (0, 1]
+  const double u2 = static_cast<double>(g() >> 11) * 0x1p-53;          // [0, 1)
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(6.283185307179586 * u2);
+}
+
 void bad(const char* type, const char* key, double v, const char* range) {
   fail(ErrorCode::kInvalidArgument,
        std::string(type) + "." + key + " = " + std::to_string(v) + " is outside " + range);
@@ -112,21 +119,13 @@ SimChassis::SimChassis(std::shared_ptr<const World> world, const ChassisSimSetti
   if (settings_.gyro_heading) {
     // The gyro's bias: its own generator, so enabling the gyro does not shift the wheel noise.
     std::mt19937_64 g(settings_.seed ^ 0x9E3779B97F4A7C15ull);
-    const double u1 = (static_cast<double>(g() >> 11) + 1.0) * 0x1p-53;
-    const double u2 = static_cast<double>(g() >> 11) * 0x1p-53;
-    gyro_bias_ = static_cast<float>(settings_.gyro_bias_std_radps * std::sqrt(-2.0 * std::log(u1)) *
-                                    std::cos(6.283185307179586 * u2));
+    gyro_bias_ = static_cast<float>(settings_.gyro_bias_std_radps * standard_normal(g));
     gyro_rng_.seed(settings_.seed ^ 0xD1B54A32D192ED03ull);
     gyro_step_std_ = static_cast<float>(static_cast<double>(settings_.gyro_noise_density) / std::sqrt(h_));
   }
 }
 
-double SimChassis::normal() {
-  // Box-Muller on 53-bit uniforms from the owned mt19937_64 (portable across libraries).
-  const double u1 = (static_cast<double>(rng_() >> 11) + 1.0) * 0x1p-53;  // (0, 1]
-  const double u2 = static_cast<double>(rng_() >> 11) * 0x1p-53;          // [0, 1)
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(6.283185307179586 * u2);
-}
+double SimChassis::normal() { return standard_normal(rng_); }
 
 bool SimChassis::collides_at(const Pose2& p, float extra_radius) const {
   return collides(*world_, Eigen::Vector2f(p.x, p.y), body_.radius_m + extra_radius, body_.z_low_m, body_.z_high_m);
@@ -188,12 +187,7 @@ void SimChassis::step() {
   // Measured wheel speeds and the nominal kinematics (what the robot's odometry computes).
   const float m_l = u_l + static_cast<float>(enc_std * n_enc_l / h_);
   const float m_r = u_r + static_cast<float>(enc_std * n_enc_r / h_);
-  float gyro_noise = 0.0f;
-  if (gyro_step_std_ > 0.0f) {
-    const double u1 = (static_cast<double>(gyro_rng_() >> 11) + 1.0) * 0x1p-53;
-    const double u2 = static_cast<double>(gyro_rng_() >> 11) * 0x1p-53;
-    gyro_noise = gyro_step_std_ * static_cast<float>(std::sqrt(-2.0 * std::log(u1)) * std::cos(6.283185307179586 * u2));
-  }
+  const float gyro_noise = gyro_step_std_ > 0.0f ? gyro_step_std_ * static_cast<float>(standard_normal(gyro_rng_)) : 0.0f;
   const Twist measured{0.5f * (m_l + m_r), s.gyro_heading ? truth.omega + gyro_bias_ + gyro_noise : (m_r - m_l) / b};
 
   // 5. Paper Eq. (4) for the truth and for the odometry.
