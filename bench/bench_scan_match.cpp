@@ -7,10 +7,12 @@
 // likelihoods, one point at a time) for every candidate, no field window precomputed, and
 // without duet's last step (the quadratic fitted to the 27 scores around the best: 28 more
 // candidates, so duet's result is off the lattice and its err differs).
+// LoopMatch/duet/...: the same scan with loop closure's wide window (runtime/loop_closure.hpp).
 // Items = candidates x points; "err_mm" / "err_mdeg" = distance of the result from the truth.
 #include "bench_util.hpp"
 
 #include <duet/kernels/scan_match.hpp>
+#include <duet/runtime/loop_closure.hpp>
 
 #include <cmath>
 #include <numbers>
@@ -140,6 +142,20 @@ void register_scan_match() {
       }
       set_counters(state, *m, p, candidates);
     });
+    // Loop closure's wide window (loop_match_defaults(): +-1.5 m, +-6 deg, 0.1 m / 1 deg, then a
+    // quarter of that) from a prior 1 m off the truth: what one loop search costs per scan.
+    benchmark::RegisterBenchmark(bench_name("LoopMatch", "duet", m->name).c_str(), [m](benchmark::State& state) {
+      ScanMatchResult r;
+      const Pose2 prior{m->truth.x + 0.8f, m->truth.y - 0.6f, m->truth.theta + 3.0f * kDeg};
+      run_guarded(state, [&] {
+        for (auto _ : state) {
+          r = arena(2).execute([&] { return scan_match(m->field.clearance(), m->points, prior, loop_match_defaults()); });
+          benchmark::DoNotOptimize(r.pose.x);
+        }
+      });
+      set_counters(state, *m, r.pose, r.candidates);
+      state.SetLabel(r.status == ScanMatchStatus::kMatched ? "matched" : "not matched");
+    })->UseRealTime();
   }
 }
 

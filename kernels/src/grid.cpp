@@ -220,3 +220,59 @@ void update_grid(OccupancyGrid& grid, const Eigen::Vector2f& sensor_xy, PointsVi
 }
 
 }  // namespace duet
+
+namespace duet {
+
+bool observed_extent(const OccupancyGrid& g, Eigen::Vector2f& lo, Eigen::Vector2f& hi) {
+  int x0 = g.width(), y0 = g.height(), x1 = -1, y1 = -1;
+  for (int y = 0; y < g.height(); ++y)
+    for (int x = 0; x < g.width(); ++x)
+      if (!std::isnan(g.at(x, y))) {
+        x0 = std::min(x0, x);
+        x1 = std::max(x1, x);
+        y0 = std::min(y0, y);
+        y1 = std::max(y1, y);
+      }
+  if (x1 < 0) return false;
+  const float r = g.resolution();
+  lo = g.origin() + Eigen::Vector2f(static_cast<float>(x0) * r, static_cast<float>(y0) * r);
+  hi = g.origin() + Eigen::Vector2f(static_cast<float>(x1 + 1) * r, static_cast<float>(y1 + 1) * r);
+  return true;
+}
+
+void accumulate_grid(OccupancyGrid& dst, const OccupancyGrid& src, const Pose2& T, float min_logodds, float max_logodds) {
+  if (dst.resolution() != src.resolution())
+    fail(ErrorCode::kInvalidArgument, "accumulate_grid: resolutions differ (" + std::to_string(dst.resolution()) + " and " +
+                                          std::to_string(src.resolution()) + " m)");
+  if (!(std::isfinite(T.x) && std::isfinite(T.y) && std::isfinite(T.theta)))
+    fail(ErrorCode::kInvalidArgument, "accumulate_grid: the placement T is not finite");
+  if (!(min_logodds <= max_logodds)) fail(ErrorCode::kInvalidArgument, "accumulate_grid: min_logodds > max_logodds");
+  Eigen::Vector2f src_lo, src_hi;
+  if (!observed_extent(src, src_lo, src_hi)) return;
+  const float c = std::cos(T.theta), s = std::sin(T.theta);
+  auto fwd = [&](const Eigen::Vector2f& p) { return Eigen::Vector2f(T.x + c * p.x() - s * p.y(), T.y + s * p.x() + c * p.y()); };
+  Eigen::Vector2f lo(std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity()), hi = -lo;
+  for (const float cx : {src_lo.x(), src_hi.x()})
+    for (const float cy : {src_lo.y(), src_hi.y()}) {
+      const Eigen::Vector2f q = fwd({cx, cy});
+      lo = lo.cwiseMin(q);
+      hi = hi.cwiseMax(q);
+    }
+  dst.ensure_contains(lo, hi, 1);
+  const Eigen::Vector2i d0 = dst.cell_of(lo), d1 = dst.cell_of(hi);
+  auto cells = dst.logodds();
+  for (int y = std::max(d0.y(), 0); y <= std::min(d1.y(), dst.height() - 1); ++y)
+    for (int x = std::max(d0.x(), 0); x <= std::min(d1.x(), dst.width() - 1); ++x) {
+      const Eigen::Vector2f q = dst.cell_center(x, y);
+      // T^-1 q = R^T (q - t)
+      const float qx = q.x() - T.x, qy = q.y() - T.y;
+      const Eigen::Vector2i sc = src.cell_of({c * qx + s * qy, -s * qx + c * qy});
+      if (!src.in_bounds(sc.x(), sc.y())) continue;
+      const float l = src.at(sc.x(), sc.y());
+      if (std::isnan(l)) continue;
+      float& v = cells[dst.index(x, y)];
+      v = std::clamp((std::isnan(v) ? 0.0f : v) + l, min_logodds, max_logodds);
+    }
+}
+
+}  // namespace duet

@@ -43,6 +43,7 @@ struct ExploreOptions {
   float slow_clearance_m = -1.0f;  // < 0: the explorer's default
   float slow_speed_mps = -1.0f;
   float gyro_noise = 0.0f;
+  bool no_loop_closure = false;
   bool quiet = false;
 };
 
@@ -125,6 +126,19 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                {"scan_matches", s.scan_matches},
                {"scan_match_rejected", s.scan_match_rejected},
                {"scan_match_time_s", s.scan_match_time_s}};
+  j["loop_closure"] = {{"enabled", s.loop_closure},
+                       {"checks", s.loops.checks},
+                       {"matches", s.loops.matches},
+                       {"rejected_edge", s.loops.rejected_edge},
+                       {"rejected_free_space", s.loops.rejected_free_space},
+                       {"confirmed", s.loops.confirmed},
+                       {"closures", s.loops.closures},
+                       {"rejected_inconsistent", s.loops.rejected_inconsistent},
+                       {"max_shift_m", s.loops.max_shift_m},
+                       {"time_s", s.loops.time_s},
+                       {"compose_time_s", s.loops.compose_time_s},
+                       {"distance_time_s", s.loops.distance_time_s},
+                       {"match_time_s", s.loops.match_time_s}};
   return j;
 }
 
@@ -189,6 +203,15 @@ nlohmann::json run_log(const sim::SimExplore& run) {
                               {"view_target", d.view ? nlohmann::json::array({d.view_target.x(), d.view_target.y()}) : nlohmann::json()},
                               {"nearest_frontier", {d.nearest_frontier.x(), d.nearest_frontier.y()}},
                               {"wall_time_ms", 1e3 * d.wall_time_s}});
+  j["loop_closures"] = nlohmann::json::array();
+  if (const LoopCloser* lc = run.runtime().loop_closer())
+    for (const auto& e : lc->events())
+      j["loop_closures"].push_back({{"t_s", e.t_s},
+                                    {"old_node", e.old_node},
+                                    {"open_node", e.open_node},
+                                    {"shift", {e.shift.x, e.shift.y, e.shift.theta}},
+                                    {"robot_shift_m", e.robot_shift_m},
+                                    {"score", e.score}});
   j["collisions"] = nlohmann::json::array();
   for (const auto& c : run.collision_log())
     j["collisions"].push_back({{"t_s", c.t_s},
@@ -254,6 +277,7 @@ int run_explore(const ExploreOptions& o) {
   es.realtime = o.realtime;
   es.use_true_pose = o.true_pose;
   es.pose_correction.enabled = !o.raw_odometry;
+  es.loop_closure.enabled = !o.no_loop_closure;
   es.explorer.recent_obstacles_s = o.recent_obstacles_s;
   es.explorer.cornered_after_s = o.cornered_after_s;
   if (o.slow_clearance_m >= 0.0f) es.explorer.slow_clearance_m = o.slow_clearance_m;
@@ -395,6 +419,8 @@ void add_explore_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--gyro-noise", o->gyro_noise,
                   "simulated gyro's rate-noise density [rad/s/sqrt(Hz)], [0, 0.01] (ChassisSimSettings::gyro_noise_density; 0 = none)")
       ->capture_default_str();
+  cmd->add_flag("--no-loop-closure", o->no_loop_closure,
+                "no loop closure (LoopClosureSettings::enabled = false): the map is the front end's (odometry + scan matching)");
   cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
   cmd->callback([o, &exit_code] { exit_code = run_explore(*o); });

@@ -25,12 +25,6 @@ ApproximateTimeSettings sync_settings(const Profile& profile, const RuntimeSetti
   return a;
 }
 
-/// a o b (b expressed in a's frame).
-Pose2 compose(const Pose2& a, const Pose2& b) {
-  const float c = std::cos(a.theta), s = std::sin(a.theta);
-  return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, std::remainder(a.theta + b.theta, 2.0f * std::numbers::pi_v<float>)};
-}
-
 /// A grid cell of resolution `res` (cells at multiples of res) as one sortable key, and back to
 /// its centre.
 std::uint64_t cell_key(float x, float y, float res) {
@@ -41,11 +35,6 @@ std::uint64_t cell_key(float x, float y, float res) {
 Eigen::Vector2f key_center(std::uint64_t k, float res) {
   return {(static_cast<float>(static_cast<std::int64_t>(k >> 32) - (1 << 30)) + 0.5f) * res,
           (static_cast<float>(static_cast<std::int64_t>(k & 0xFFFFFFFFull) - (1 << 30)) + 0.5f) * res};
-}
-
-Pose2 inverse(const Pose2& a) {
-  const float c = std::cos(a.theta), s = std::sin(a.theta);
-  return {-(c * a.x + s * a.y), -(-s * a.x + c * a.y), -a.theta};
 }
 
 }  // namespace
@@ -77,6 +66,7 @@ void validate(const RuntimeSettings& s) {
   validate(s.explorer);
   validate(s.sync);
   validate(s.pose_correction);
+  validate(s.loop_closure);
 }
 
 ExplorationRuntime::ExplorationRuntime(const Profile& profile, ChassisInterface& chassis,
@@ -93,6 +83,8 @@ ExplorationRuntime::ExplorationRuntime(const Profile& profile, ChassisInterface&
                                           std::to_string(profile_.sensors.size()));
   for (std::size_t i = 0; i < sensors_.size(); ++i)
     if (sensors_[i] == nullptr) fail(ErrorCode::kInvalidArgument, "ExplorationRuntime: sensor " + std::to_string(i) + " is null");
+  if (settings_.loop_closure.enabled && settings_.pose_correction.enabled)
+    loop_.emplace(settings_.loop_closure, profile_.exploration.cells, mapper_);
 }
 
 void ExplorationRuntime::integrate(const ApproximateTimeCore::Set& set, double now_s) {
@@ -132,6 +124,19 @@ void ExplorationRuntime::integrate(const ApproximateTimeCore::Set& set, double n
       }
     }
     mapper_.integrate(frames, to_isometry(at));
+    if (loop_ && !pose_override_) {
+      if (const std::optional<Pose2> shift = loop_->update(mapper_, at, t_frames)) {
+        // The map frame moved: so do the correction (map <- odometry), the pose, and what the
+        // explorer keeps; the matcher's reference copy is of the old frame.
+        correction_ = compose(*shift, correction_);
+        pose_ = compose(correction_, odom_pose_);
+        at = compose(*shift, at);
+        explorer_.shift_frame(*shift);
+        have_reference_ = false;
+        pending_t_ = -1.0;
+        ++stats_.loop_closures;
+      }
+    }
     if (settings_.explorer.recent_obstacles_s > 0.0f) remember_obstacles(at, odom_at, t_frames);
     explorer_.update_map(mapper_.grid(), pose_, now_s);
     ++stats_.sets_integrated;

@@ -140,6 +140,19 @@ void Explorer::mark_recent(OccupancyGrid& g) {
   stats_.recent_obstacle_cells += recent_cells_.size();
 }
 
+void Explorer::shift_frame(const Pose2& D) {
+  if (!(std::isfinite(D.x) && std::isfinite(D.y) && std::isfinite(D.theta)))
+    fail(ErrorCode::kInvalidArgument, "Explorer::shift_frame: the shift is not finite");
+  const float c = std::cos(D.theta), s = std::sin(D.theta);
+  auto move = [&](Eigen::Vector2f& p) { p = Eigen::Vector2f(D.x + c * p.x() - s * p.y(), D.y + s * p.x() + c * p.y()); };
+  for (auto* v : {&trail_, &contacts_, &recent_, &path_})
+    for (Eigen::Vector2f& p : *v) move(p);
+  move(goal_target_);
+  move(view_target_);
+  if (cornered_at_.allFinite()) move(cornered_at_);
+  if (goal_) goal_ = compose(D, *goal_);
+}
+
 void Explorer::update_map(const OccupancyGrid& grid, const Pose2& robot, double now_s) {
   const GridView view(grid);
   if (model_geometry_valid_ && same_geometry(model_.grid(), view)) {

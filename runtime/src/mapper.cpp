@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <string>
 
 namespace duet {
 
@@ -48,11 +49,67 @@ void Mapper::integrate(std::span<const SensorFrame> frames, const Eigen::Isometr
     update_grid(grid_, origin.head<2>(), filtered_.points_view(), labels_, settings_.grid_update, grid_ws_);
     filtered_.normals.clear();
     filtered_.curvature.clear();
-    pending_.append(filtered_);
+    if (keep_submaps_) {
+      Submap& sm = submaps_.back();
+      update_grid(sm.grid, origin.head<2>(), filtered_.points_view(), labels_, settings_.grid_update, grid_ws_);
+      sm.cloud.append(filtered_);
+      ++sm.frames;
+      cloud_dirty_ = true;
+    } else {
+      pending_.append(filtered_);
+    }
     ++stats_.frames;
   }
   ++stats_.observations;
-  if (pending_.size() > std::max<std::size_t>(global_.size(), 2'000'000)) compact();
+  if (keep_submaps_) {
+    // The open submap's cloud is re-filtered as it grows (as the global cloud is without submaps).
+    Submap& sm = submaps_.back();
+    if (sm.cloud.size() > 400'000) {
+      PointCloud merged;
+      voxel_filter(sm.cloud.points_view(), sm.cloud.colors_view(), settings_.voxel_filter, vf_ws_, merged);
+      sm.cloud = std::move(merged);
+    }
+  } else if (pending_.size() > std::max<std::size_t>(global_.size(), 2'000'000)) {
+    compact();
+  }
+}
+
+void Mapper::keep_submaps() {
+  if (stats_.observations > 0) fail(ErrorCode::kInvalidArgument, "Mapper::keep_submaps: call it before the first integrate()");
+  if (keep_submaps_) return;
+  keep_submaps_ = true;
+  submaps_.clear();
+  submaps_.push_back(Submap{OccupancyGrid(settings_.grid_resolution_m), {}, {}, 0});
+}
+
+std::size_t Mapper::open_submap() {
+  if (!keep_submaps_) fail(ErrorCode::kInvalidArgument, "Mapper::open_submap: submaps are not kept (call keep_submaps() first)");
+  Submap& last = submaps_.back();
+  if (last.frames == 0) return submaps_.size() - 1;
+  if (!last.cloud.empty()) {
+    PointCloud merged;
+    voxel_filter(last.cloud.points_view(), last.cloud.colors_view(), settings_.voxel_filter, vf_ws_, merged);
+    last.cloud = std::move(merged);
+  }
+  submaps_.push_back(Submap{OccupancyGrid(settings_.grid_resolution_m), {}, {}, 0});
+  return submaps_.size() - 1;
+}
+
+void Mapper::place_submaps(std::span<const Pose2> placements) {
+  if (!keep_submaps_) fail(ErrorCode::kInvalidArgument, "Mapper::place_submaps: submaps are not kept (call keep_submaps() first)");
+  if (placements.size() != submaps_.size())
+    fail(ErrorCode::kInvalidArgument, "Mapper::place_submaps: " + std::to_string(placements.size()) + " placements for " +
+                                          std::to_string(submaps_.size()) + " submaps");
+  for (std::size_t i = 0; i < placements.size(); ++i)
+    if (!(std::isfinite(placements[i].x) && std::isfinite(placements[i].y) && std::isfinite(placements[i].theta)))
+      fail(ErrorCode::kInvalidArgument, "Mapper::place_submaps: placement " + std::to_string(i) + " is not finite");
+  OccupancyGrid grid(settings_.grid_resolution_m);
+  for (std::size_t i = 0; i < submaps_.size(); ++i) {
+    submaps_[i].placement = placements[i];
+    accumulate_grid(grid, submaps_[i].grid, placements[i], settings_.grid_update.min_logodds, settings_.grid_update.max_logodds);
+  }
+  grid_ = std::move(grid);
+  cloud_dirty_ = true;
 }
 
 void Mapper::compact() {
@@ -65,7 +122,25 @@ void Mapper::compact() {
 }
 
 const PointCloud& Mapper::cloud() {
-  compact();
+  if (!keep_submaps_) {
+    compact();
+    return global_;
+  }
+  if (!cloud_dirty_) return global_;
+  // The submaps' points at their placements, voxel-filtered together.
+  PointCloud all;
+  for (const Submap& sm : submaps_) {
+    const std::size_t b = all.size();
+    all.append(sm.cloud);
+    const float c = std::cos(sm.placement.theta), s = std::sin(sm.placement.theta);
+    if (sm.placement.x == 0.0f && sm.placement.y == 0.0f && sm.placement.theta == 0.0f) continue;
+    for (std::size_t k = b; k < all.size(); ++k) {
+      Eigen::Vector3f& p = all.points[k];
+      p = Eigen::Vector3f(sm.placement.x + c * p.x() - s * p.y(), sm.placement.y + s * p.x() + c * p.y(), p.z());
+    }
+  }
+  voxel_filter(all.points_view(), all.colors_view(), settings_.voxel_filter, vf_ws_, global_);
+  cloud_dirty_ = false;
   return global_;
 }
 

@@ -706,3 +706,41 @@ TEST(Explorer, InvalidStandoffSearchThrows) {
 }
 
 }  // namespace
+
+namespace {
+
+// A loop closure moves the map frame: the goal, its path and the recent obstacles move by the
+// same shift (new = D * old); a non-finite shift is refused and moves nothing.
+TEST(Explorer, ShiftFrameMovesTheGoalThePathAndTheRecentObstacles) {
+  const duet::Profile p = frontier_only_profile();
+  duet::Explorer e(p);
+  const duet::Pose2 robot{1.0f, 1.5f, 0.0f};
+  e.update_map(half_known_room(), robot, 0.0);
+  (void)e.control(robot, duet::Twist{}, 0.0);
+  ASSERT_TRUE(e.goal().has_value());
+  ASSERT_FALSE(e.path().empty());
+  const std::vector<Eigen::Vector2f> recent{{2.0f, 2.0f}};
+  e.set_recent_obstacles(recent);
+  ASSERT_EQ(e.recent_obstacles().size(), 1u);
+  const duet::Pose2 goal = *e.goal();
+  const std::vector<Eigen::Vector2f> path = e.path();
+  const duet::Pose2 D{0.3f, -0.2f, 0.05f};
+  EXPECT_THROW(e.shift_frame(duet::Pose2{std::nanf(""), 0.0f, 0.0f}), duet::Error);
+  EXPECT_EQ(e.goal()->x, goal.x);
+  e.shift_frame(D);
+  const duet::Pose2 want = duet::compose(D, goal);
+  EXPECT_NEAR(e.goal()->x, want.x, 1e-5f);
+  EXPECT_NEAR(e.goal()->y, want.y, 1e-5f);
+  EXPECT_NEAR(e.goal()->theta, want.theta, 1e-5f);
+  ASSERT_EQ(e.path().size(), path.size());
+  for (std::size_t k = 0; k < path.size(); ++k) {
+    const duet::Pose2 q = duet::compose(D, duet::Pose2{path[k].x(), path[k].y(), 0.0f});
+    EXPECT_NEAR(e.path()[k].x(), q.x, 1e-5f);
+    EXPECT_NEAR(e.path()[k].y(), q.y, 1e-5f);
+  }
+  const duet::Pose2 r = duet::compose(D, duet::Pose2{2.0f, 2.0f, 0.0f});
+  EXPECT_NEAR(e.recent_obstacles()[0].x(), r.x, 1e-5f);
+  EXPECT_NEAR(e.recent_obstacles()[0].y(), r.y, 1e-5f);
+}
+
+}  // namespace

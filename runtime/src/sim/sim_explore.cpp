@@ -44,6 +44,7 @@ RuntimeSettings runtime_settings(const ExploreSettings& s) {
   r.explorer = s.explorer;
   r.sync = s.sync;
   r.pose_correction = s.pose_correction;
+  r.loop_closure = s.loop_closure;
   return r;
 }
 
@@ -78,6 +79,7 @@ void validate(const ExploreSettings& s) {
   validate(s.render);
   validate(s.sync);
   validate(s.pose_correction);
+  validate(s.loop_closure);
 }
 
 SimRgbdSensor::SimRgbdSensor(const RgbdRenderer& renderer, const SimChassis& chassis, SensorProfile sensor, double rate_hz,
@@ -261,6 +263,10 @@ ExploreSummary SimExplore::summary() const {
   s.scan_matches = rs.scan_matches;
   s.scan_match_rejected = rs.scan_match_rejected;
   s.scan_match_time_s = rs.scan_match_time_s;
+  if (const LoopCloser* lc = runtime_->loop_closer()) {
+    s.loop_closure = true;
+    s.loops = lc->stats();
+  }
   return s;
 }
 

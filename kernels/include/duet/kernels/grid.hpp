@@ -9,6 +9,7 @@
 ///
 /// Thread safety: OccupancyGrid is a value type; const members may be called concurrently,
 /// update_grid() needs exclusive access to the grid and the workspace.
+#include <duet/kernels/motion_model.hpp>
 #include <duet/kernels/segmentation.hpp>
 #include <duet/kernels/types.hpp>
 
@@ -101,5 +102,21 @@ void update_grid(OccupancyGrid& grid, const Eigen::Vector2f& sensor_xy, PointsVi
                  GridUpdateWorkspace& workspace);
 
 void validate(const GridUpdateSettings& settings);
+
+/// The box [lo, hi] [m] covering the grid's observed (non-NaN) cells; false (lo, hi untouched)
+/// when no cell is observed.
+[[nodiscard]] bool observed_extent(const OccupancyGrid& grid, Eigen::Vector2f& lo, Eigen::Vector2f& hi);
+
+/// Adds the log-odds of `src`, placed in dst's frame by T (a point p of src's frame lies at T p),
+/// to `dst` (the same resolution): every dst cell whose centre, taken back by T^-1, falls in an
+/// observed src cell (nearest cell) gets that cell's log-odds added - an unknown dst cell counts
+/// as 0 - and the sum is clamped to [min_logodds, max_logodds]. dst grows (never shrinks, origin
+/// alignment kept) to hold src's observed cells. This is how a grid is rebuilt from submaps
+/// after their poses move (loop closure): the sum of the submaps' log-odds is the log-odds of
+/// their observations combined (clamping aside). src with no observed cell: nothing happens.
+/// Throws duet::Error(kInvalidArgument) for different resolutions, a non-finite T or
+/// min_logodds > max_logodds (dst unchanged).
+void accumulate_grid(OccupancyGrid& dst, const OccupancyGrid& src, const Pose2& T, float min_logodds, float max_logodds);
+
 
 }  // namespace duet

@@ -16,6 +16,18 @@ struct Pose2 {
   float theta = 0.0f;  ///< heading [rad], counter-clockwise from +x
 };
 
+/// a * b: pose b, given in a's frame, in a's parent frame (heading wrapped to [-pi, pi]).
+[[nodiscard]] inline Pose2 compose(const Pose2& a, const Pose2& b) noexcept {
+  const float c = std::cos(a.theta), s = std::sin(a.theta);
+  return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, std::remainder(a.theta + b.theta, 6.28318530717958647692f)};
+}
+
+/// a^-1: compose(a, inverse(a)) is the identity.
+[[nodiscard]] inline Pose2 inverse(const Pose2& a) noexcept {
+  const float c = std::cos(a.theta), s = std::sin(a.theta);
+  return {-(c * a.x + s * a.y), -(-s * a.x + c * a.y), -a.theta};
+}
+
 /// A velocity command of a differential-drive chassis.
 struct Twist {
   float v = 0.0f;      ///< forward speed [m/s]

@@ -15,7 +15,10 @@
 ///     frames are matched against the grid before it integrates them, and the correction
 ///     map <- odometry then applies to every odometry pose until the next update) - or, for
 ///     debugging only, a pose the caller overrides;
-///  4. control: the explorer's decision / dynamic window command goes to the chassis.
+///  4. loop closure (loop_closure.hpp): after each map update the loop closer may move the map
+///     (submaps placed by an optimised pose graph); the correction, the pose and what the
+///     explorer holds in the map frame move with it;
+///  5. control: the explorer's decision / dynamic window command goes to the chassis.
 /// Until visual odometry exists the map frame is the odometry frame corrected by the matcher
 /// (with the correction off: the odometry frame itself).
 ///
@@ -23,6 +26,7 @@
 /// arena and the results do not depend on the thread count.
 #include <duet/kernels/scan_match.hpp>
 #include <duet/runtime/explorer.hpp>
+#include <duet/runtime/loop_closure.hpp>
 #include <duet/runtime/mapper.hpp>
 #include <duet/runtime/profile.hpp>
 #include <duet/runtime/robot_io.hpp>
@@ -85,6 +89,9 @@ struct RuntimeSettings {
   ExplorerSettings explorer;
   ApproximateTimeSettings sync;    ///< queue_size raised to hold two sensor periods of odometry
   PoseCorrectionSettings pose_correction;
+  /// Submaps, loop search and pose-graph optimisation (loop_closure.hpp); needs the pose
+  /// correction (the loop closer trusts the front end over query_window_s).
+  LoopClosureSettings loop_closure;
 };
 void validate(const RuntimeSettings& s);
 
@@ -98,6 +105,7 @@ struct RuntimeStats {
   std::size_t scan_matches = 0;          ///< map updates whose scan match was accepted (the correction moved)
   std::size_t scan_match_rejected = 0;   ///< ... not accepted (too few points, not confident): correction kept
   double scan_match_time_s = 0.0;        ///< wall time in the correction (points, field, match) [s]
+  std::size_t loop_closures = 0;         ///< closures that moved the map frame (LoopCloser::stats() has more)
 };
 
 class ExplorationRuntime {
@@ -124,6 +132,8 @@ class ExplorationRuntime {
   [[nodiscard]] Mapper& mapper() noexcept { return mapper_; }
   [[nodiscard]] const Mapper& mapper() const noexcept { return mapper_; }
   [[nodiscard]] const Explorer& explorer() const noexcept { return explorer_; }
+  /// The loop closer (nullptr when LoopClosureSettings::enabled or the pose correction is off).
+  [[nodiscard]] const LoopCloser* loop_closer() const noexcept { return loop_ ? &*loop_ : nullptr; }
   [[nodiscard]] const RuntimeStats& stats() const noexcept { return stats_; }
   [[nodiscard]] const ApproximateTimeCore& synchronizer() const noexcept { return sync_; }
   [[nodiscard]] const Profile& profile() const noexcept { return profile_; }
@@ -147,6 +157,7 @@ class ExplorationRuntime {
   std::vector<RgbdSensorInterface*> sensors_;
   Mapper mapper_;
   Explorer explorer_;
+  std::optional<LoopCloser> loop_;
   ApproximateTimeCore sync_;
   // Payloads waiting in the synchronizer, by id (moved in and out, never copied).
   std::unordered_map<std::uint64_t, RgbdImage> frames_;

@@ -247,6 +247,13 @@ class Explorer {
   void set_recent_obstacles(std::span<const Eigen::Vector2f> points);
   [[nodiscard]] const std::vector<Eigen::Vector2f>& recent_obstacles() const noexcept { return recent_; }
 
+  /// The map frame moved (a loop closure): what the explorer keeps in it - the goal, its path,
+  /// the body's trail, the contacts, the recent obstacles, the view target - is moved by D
+  /// (new = D * old). The trail's and contacts' older parts were mapped with other corrections
+  /// and are moved by the same D (an approximation: they only free unknown cells under the
+  /// body and block cells the bumper hit). Call before the next update_map().
+  void shift_frame(const Pose2& D);
+
   /// One control period (20 Hz): takes a decision if needed, then the dynamic window's command.
   /// `current` is the chassis' twist (odometry). Returns a zero twist when idle or done.
   Twist control(const Pose2& robot, const Twist& current, double now_s);

@@ -15,6 +15,7 @@
 /// results do not depend on the thread count.
 #include <duet/kernels/back_projection.hpp>
 #include <duet/kernels/grid.hpp>
+#include <duet/kernels/motion_model.hpp>
 #include <duet/kernels/normals.hpp>
 #include <duet/kernels/segmentation.hpp>
 #include <duet/kernels/voxel_filter.hpp>
@@ -31,6 +32,16 @@ struct MapperStats {
   std::size_t filtered_points = 0;  ///< points after the per-frame voxel filter
   std::size_t obstacle_points = 0;  ///< of those, labelled obstacle
   std::size_t floor_points = 0;     ///< of those, labelled floor
+};
+
+/// A submap: what the mapper integrated over a stretch of time, kept apart so that it can be
+/// moved as a whole when a loop closure corrects the poses it was integrated at (see
+/// Mapper::keep_submaps()).
+struct Submap {
+  OccupancyGrid grid;        ///< this submap's observations only (log-odds, clamped), map frame as integrated
+  PointCloud cloud;          ///< its voxel-filtered points (colours), map frame as integrated
+  Pose2 placement;           ///< where its content lies now: p_map = placement * p_integrated (identity until moved)
+  std::size_t frames = 0;    ///< sensor frames integrated into it
 };
 
 class Mapper {
@@ -53,6 +64,23 @@ class Mapper {
   [[nodiscard]] const MappingSettings& settings() const noexcept { return settings_; }
   [[nodiscard]] const Eigen::Isometry3f& T_map_world() const noexcept { return T_map_world_; }
 
+  /// Submaps (loop closure): from now on every integrate() also goes into the open submap (the
+  /// last of submaps()), and the global cloud is kept per submap instead. Call before the first
+  /// integrate(); throws duet::Error(kInvalidArgument) after it. The grid and the cloud are
+  /// unchanged by this until place_submaps() moves a submap.
+  void keep_submaps();
+  [[nodiscard]] bool keeps_submaps() const noexcept { return keep_submaps_; }
+  /// Closes the open submap (if it holds anything) and opens an empty one; returns its index.
+  /// Throws duet::Error(kInvalidArgument) when submaps are not kept.
+  std::size_t open_submap();
+  [[nodiscard]] const std::vector<Submap>& submaps() const noexcept { return submaps_; }
+  /// Moves the submaps to `placements` (one per submap, submaps().size() of them) and rebuilds
+  /// the grid as the sum of their log-odds at their placements (accumulate_grid(), clamped to
+  /// the grid update's limits; cells no submap saw are unknown) and the cloud from their points.
+  /// Throws duet::Error(kInvalidArgument) for the wrong count, a non-finite placement, or when
+  /// submaps are not kept; nothing changes then.
+  void place_submaps(std::span<const Pose2> placements);
+
  private:
   void compact();
 
@@ -62,6 +90,9 @@ class Mapper {
   PointCloud global_;   // filtered
   PointCloud pending_;  // per-frame filtered clouds not yet merged into global_
   MapperStats stats_;
+  bool keep_submaps_ = false;
+  std::vector<Submap> submaps_;
+  bool cloud_dirty_ = false;  // submaps: global_ is out of date
   // Reused scratch.
   PointCloud raw_, filtered_;
   std::vector<PointLabel> labels_;

@@ -66,6 +66,7 @@ struct ExploreSettings {
   std::optional<ChassisSimSettings> chassis;
   ApproximateTimeSettings sync;    ///< the synchronizer (queue size, max interval)
   PoseCorrectionSettings pose_correction;  ///< scan-to-map correction of the odometry (enabled = false: raw odometry)
+  LoopClosureSettings loop_closure;        ///< submaps + loop search + pose graph (enabled = false: none)
 };
 void validate(const ExploreSettings& s);
 
@@ -111,6 +112,8 @@ struct ExploreSummary {
   std::size_t scan_matches = 0;          ///< map updates whose scan match was accepted
   std::size_t scan_match_rejected = 0;   ///< map updates whose scan match was not (correction kept)
   double scan_match_time_s = 0.0;        ///< wall time in the scan-to-map correction [s]
+  bool loop_closure = false;             ///< the loop closer ran
+  LoopClosureStats loops;                ///< its counters (all 0 without it)
 };
 
 /// One collision (a contact onset of the chassis).
