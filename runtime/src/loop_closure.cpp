@@ -95,23 +95,16 @@ std::optional<Pose2> LoopCloser::update(Mapper& mapper, const Pose2& at, double 
     opened_t_ = t;
     travel_m_ = 0.0f;
   }
-  // 2. The query window: this update's obstacle points, one per cell.
+  // 2. The query window: this update's obstacle points, one per cell (the first in order).
   {
     const float res = mapper.grid().resolution();
-    keys_.clear();
-    QueryScan scan{t, {}};
-    for (const Eigen::Vector2f& p : mapper.last_obstacles()) {
-      if (!p.allFinite()) continue;
-      keys_.push_back(cell_key(p.x(), p.y(), res));
-    }
-    std::vector<std::size_t> order(keys_.size());
-    std::vector<Eigen::Vector2f> pts;
+    cells_scratch_.clear();
     for (const Eigen::Vector2f& p : mapper.last_obstacles())
-      if (p.allFinite()) pts.push_back(p);
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return keys_[a] < keys_[b]; });
-    for (std::size_t i = 0; i < order.size(); ++i)
-      if (i == 0 || keys_[order[i]] != keys_[order[i - 1]]) scan.points.push_back(pts[order[i]]);
+      if (p.allFinite()) cells_scratch_.emplace_back(cell_key(p.x(), p.y(), res), p);
+    std::stable_sort(cells_scratch_.begin(), cells_scratch_.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    QueryScan scan{t, {}};
+    for (std::size_t i = 0; i < cells_scratch_.size(); ++i)
+      if (i == 0 || cells_scratch_[i].first != cells_scratch_[i - 1].first) scan.points.push_back(cells_scratch_[i].second);
     ring_.push_back(std::move(scan));
     while (!ring_.empty() && ring_.front().t < t - settings_.query_window_s) ring_.pop_front();
   }
@@ -175,7 +168,8 @@ bool LoopCloser::check(Mapper& mapper, const Pose2& at, double t, Pose2& match, 
   // The query: the window's points in the robot frame, one per cell, thinned evenly.
   const Pose2 robot_from_map = inverse(at);
   const float res = mapper.grid().resolution();
-  std::vector<std::pair<std::uint64_t, Eigen::Vector2f>> cells;
+  std::vector<std::pair<std::uint64_t, Eigen::Vector2f>>& cells = cells_scratch_;
+  cells.clear();
   for (const QueryScan& s : ring_)
     for (const Eigen::Vector2f& p : s.points) cells.emplace_back(cell_key(p.x(), p.y(), res), p);
   std::stable_sort(cells.begin(), cells.end(), [](const auto& a, const auto& b) { return a.first < b.first; });

@@ -149,7 +149,7 @@ class LoopCloser {
   OccupancyGrid reference_;
   InflatedGrid distance_;
   std::vector<Eigen::Vector2f> query_;
-  std::vector<std::uint64_t> keys_;
+  std::vector<std::pair<std::uint64_t, Eigen::Vector2f>> cells_scratch_;  ///< (cell, point) scratch
   LoopClosureStats stats_;
   std::vector<LoopClosureEvent> events_;
   struct Extent {
