@@ -249,17 +249,16 @@ void accumulate_grid(OccupancyGrid& dst, const OccupancyGrid& src, const Pose2& 
   if (!(min_logodds <= max_logodds)) fail(ErrorCode::kInvalidArgument, "accumulate_grid: min_logodds > max_logodds");
   Eigen::Vector2f src_lo, src_hi;
   if (!observed_extent(src, src_lo, src_hi)) return;
-  const float c = std::cos(T.theta), s = std::sin(T.theta);
-  auto fwd = [&](const Eigen::Vector2f& p) { return Eigen::Vector2f(T.x + c * p.x() - s * p.y(), T.y + s * p.x() + c * p.y()); };
   Eigen::Vector2f lo(std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity()), hi = -lo;
   for (const float cx : {src_lo.x(), src_hi.x()})
     for (const float cy : {src_lo.y(), src_hi.y()}) {
-      const Eigen::Vector2f q = fwd({cx, cy});
+      const Eigen::Vector2f q = transform_point(T, {cx, cy});
       lo = lo.cwiseMin(q);
       hi = hi.cwiseMax(q);
     }
   dst.ensure_contains(lo, hi, 1);
   const Eigen::Vector2i d0 = dst.cell_of(lo), d1 = dst.cell_of(hi);
+  const float c = std::cos(T.theta), s = std::sin(T.theta);
   auto cells = dst.logodds();
   for (int y = std::max(d0.y(), 0); y <= std::min(d1.y(), dst.height() - 1); ++y)
     for (int x = std::max(d0.x(), 0); x <= std::min(d1.x(), dst.width() - 1); ++x) {

@@ -3,6 +3,8 @@
 #include <duet/kernels/error.hpp>
 #include <duet/runtime/exploration_runtime.hpp>
 
+#include "cell_key.hpp"
+
 #include <numbers>
 
 #include <algorithm>
@@ -23,18 +25,6 @@ ApproximateTimeSettings sync_settings(const Profile& profile, const RuntimeSetti
   a.inter_message_lower_bounds_s.assign(profile.sensors.size(), 0.9 / s.sensor_rate_hz);
   a.inter_message_lower_bounds_s.push_back(0.9 / odom_rate);
   return a;
-}
-
-/// A grid cell of resolution `res` (cells at multiples of res) as one sortable key, and back to
-/// its centre.
-std::uint64_t cell_key(float x, float y, float res) {
-  const auto cx = static_cast<std::int64_t>(std::floor(x / res)), cy = static_cast<std::int64_t>(std::floor(y / res));
-  return (static_cast<std::uint64_t>(cx + (1 << 30)) << 32) | static_cast<std::uint64_t>(cy + (1 << 30));
-}
-
-Eigen::Vector2f key_center(std::uint64_t k, float res) {
-  return {(static_cast<float>(static_cast<std::int64_t>(k >> 32) - (1 << 30)) + 0.5f) * res,
-          (static_cast<float>(static_cast<std::int64_t>(k & 0xFFFFFFFFull) - (1 << 30)) + 0.5f) * res};
 }
 
 }  // namespace

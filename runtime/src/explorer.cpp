@@ -143,8 +143,7 @@ void Explorer::mark_recent(OccupancyGrid& g) {
 void Explorer::shift_frame(const Pose2& D) {
   if (!(std::isfinite(D.x) && std::isfinite(D.y) && std::isfinite(D.theta)))
     fail(ErrorCode::kInvalidArgument, "Explorer::shift_frame: the shift is not finite");
-  const float c = std::cos(D.theta), s = std::sin(D.theta);
-  auto move = [&](Eigen::Vector2f& p) { p = Eigen::Vector2f(D.x + c * p.x() - s * p.y(), D.y + s * p.x() + c * p.y()); };
+  auto move = [&](Eigen::Vector2f& p) { p = transform_point(D, p); };
   for (auto* v : {&trail_, &contacts_, &recent_, &path_})
     for (Eigen::Vector2f& p : *v) move(p);
   move(goal_target_);

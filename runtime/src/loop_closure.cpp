@@ -3,6 +3,8 @@
 #include <duet/kernels/error.hpp>
 #include <duet/runtime/loop_closure.hpp>
 
+#include "cell_key.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -14,16 +16,6 @@ namespace duet {
 namespace {
 
 constexpr float kDeg = std::numbers::pi_v<float> / 180.0f;
-
-std::uint64_t cell_key(float x, float y, float res) {
-  const auto cx = static_cast<std::int64_t>(std::floor(x / res)), cy = static_cast<std::int64_t>(std::floor(y / res));
-  return (static_cast<std::uint64_t>(cx + (1 << 30)) << 32) | static_cast<std::uint64_t>(cy + (1 << 30));
-}
-
-Eigen::Vector2f apply(const Pose2& T, const Eigen::Vector2f& p) {
-  const float c = std::cos(T.theta), s = std::sin(T.theta);
-  return {T.x + c * p.x() - s * p.y(), T.y + s * p.x() + c * p.y()};
-}
 
 }  // namespace
 
@@ -120,7 +112,6 @@ std::optional<Pose2> LoopCloser::update(Mapper& mapper, const Pose2& at, double 
                           std::hypot(offset.x - pending_->offset.x, offset.y - pending_->offset.y) <= settings_.confirm_m &&
                           std::fabs(std::remainder(offset.theta - pending_->offset.theta, 2.0f * std::numbers::pi_v<float>)) <=
                               settings_.confirm_deg * kDeg;
-      // Same for the position of the robot under the two offsets (a heading offset moves far points).
       if (agrees) {
         ++stats_.confirmed;
         pending_.reset();
@@ -156,7 +147,7 @@ bool LoopCloser::check(Mapper& mapper, const Pose2& at, double t, Pose2& match, 
     if (!extents_[k].observed) continue;
     const Eigen::Vector2f lo = extents_[k].lo, hi = extents_[k].hi;
     // The extent's placed bounding circle against the robot.
-    const Eigen::Vector2f c = apply(submaps[k].placement, 0.5f * (lo + hi));
+    const Eigen::Vector2f c = transform_point(submaps[k].placement, 0.5f * (lo + hi));
     const float rad = 0.5f * (hi - lo).norm();
     if ((c - Eigen::Vector2f(at.x, at.y)).norm() > r + rad) continue;
     accumulate_grid(reference_, submaps[k].grid, submaps[k].placement, mapper.settings().grid_update.min_logodds,
@@ -176,7 +167,7 @@ bool LoopCloser::check(Mapper& mapper, const Pose2& at, double t, Pose2& match, 
   cells.erase(std::unique(cells.begin(), cells.end(), [](const auto& a, const auto& b) { return a.first == b.first; }), cells.end());
   const std::size_t stride = (cells.size() + settings_.max_query_points - 1) / settings_.max_query_points;
   query_.clear();
-  for (std::size_t k = 0; k < cells.size(); k += std::max<std::size_t>(stride, 1)) query_.push_back(apply(robot_from_map, cells[k].second));
+  for (std::size_t k = 0; k < cells.size(); k += std::max<std::size_t>(stride, 1)) query_.push_back(transform_point(robot_from_map, cells[k].second));
   if (query_.size() < settings_.match.min_points) return false;
   const auto tc = std::chrono::steady_clock::now();
   occupied_distance(GridView(reference_), cells_, distance_);
@@ -199,11 +190,10 @@ bool LoopCloser::check(Mapper& mapper, const Pose2& at, double t, Pose2& match, 
   // floor. Points near an old wall count for the match, points on known free floor against it.
   std::size_t hits = 0, conflicts = 0;
   for (const Eigen::Vector2f& q : query_) {
-    const Eigen::Vector2f p = apply(res_match.pose, q);
-    const auto ix = static_cast<int>(std::floor((p.x() - distance_.origin.x()) / distance_.resolution_m));
-    const auto iy = static_cast<int>(std::floor((p.y() - distance_.origin.y()) / distance_.resolution_m));
-    if (ix < 0 || iy < 0 || ix >= distance_.width || iy >= distance_.height) continue;
-    const std::size_t i = distance_.index(ix, iy);
+    const Eigen::Vector2f p = transform_point(res_match.pose, q);
+    Eigen::Vector2i cell;
+    if (!distance_.cell_of(p, cell)) continue;
+    const std::size_t i = distance_.index(cell.x(), cell.y());
     if (distance_.clearance_m[i] <= settings_.verify_hit_m)
       ++hits;
     else if (distance_.state[i] == CellState::kFree && distance_.clearance_m[i] > settings_.verify_free_m)
@@ -223,7 +213,7 @@ bool LoopCloser::check(Mapper& mapper, const Pose2& at, double t, Pose2& match, 
     const Pose2 to_sub = inverse(sm.placement);
     std::size_t count = 0;
     for (const Eigen::Vector2f& q : query_) {
-      const Eigen::Vector2f p = apply(to_sub, apply(match, q));
+      const Eigen::Vector2f p = transform_point(to_sub, transform_point(match, q));
       const Eigen::Vector2i c = sm.grid.cell_of(p);
       if (sm.grid.in_bounds(c.x(), c.y()) && classify(sm.grid.at(c.x(), c.y()), cells_) == CellState::kOccupied) ++count;
     }
@@ -272,7 +262,7 @@ std::optional<Pose2> LoopCloser::close(Mapper& mapper, const Pose2& at, double t
   mapper.place_submaps(placements);
   const Pose2 shift = placements[c];  // the open submap's content (the current frame) moves by this
   for (QueryScan& s : ring_)
-    for (Eigen::Vector2f& p : s.points) p = apply(shift, p);
+    for (Eigen::Vector2f& p : s.points) p = transform_point(shift, p);
   last_at_ = compose(shift, at);
   (void)mapper.open_submap();
   ++stats_.closures;

@@ -64,11 +64,7 @@ void Mapper::integrate(std::span<const SensorFrame> frames, const Eigen::Isometr
   if (keep_submaps_) {
     // The open submap's cloud is re-filtered as it grows (as the global cloud is without submaps).
     Submap& sm = submaps_.back();
-    if (sm.cloud.size() > 400'000) {
-      PointCloud merged;
-      voxel_filter(sm.cloud.points_view(), sm.cloud.colors_view(), settings_.voxel_filter, vf_ws_, merged);
-      sm.cloud = std::move(merged);
-    }
+    if (sm.cloud.size() > 400'000) refilter(sm.cloud);
   } else if (pending_.size() > std::max<std::size_t>(global_.size(), 2'000'000)) {
     compact();
   }
@@ -86,11 +82,7 @@ std::size_t Mapper::open_submap() {
   if (!keep_submaps_) fail(ErrorCode::kInvalidArgument, "Mapper::open_submap: submaps are not kept (call keep_submaps() first)");
   Submap& last = submaps_.back();
   if (last.frames == 0) return submaps_.size() - 1;
-  if (!last.cloud.empty()) {
-    PointCloud merged;
-    voxel_filter(last.cloud.points_view(), last.cloud.colors_view(), settings_.voxel_filter, vf_ws_, merged);
-    last.cloud = std::move(merged);
-  }
+  if (!last.cloud.empty()) refilter(last.cloud);
   submaps_.push_back(Submap{OccupancyGrid(settings_.grid_resolution_m), {}, {}, 0});
   return submaps_.size() - 1;
 }
@@ -112,13 +104,17 @@ void Mapper::place_submaps(std::span<const Pose2> placements) {
   cloud_dirty_ = true;
 }
 
+void Mapper::refilter(PointCloud& cloud) {
+  PointCloud merged;
+  voxel_filter(cloud.points_view(), cloud.colors_view(), settings_.voxel_filter, vf_ws_, merged);
+  cloud = std::move(merged);
+}
+
 void Mapper::compact() {
   if (pending_.empty()) return;
   global_.append(pending_);
   pending_.clear();
-  PointCloud merged;
-  voxel_filter(global_.points_view(), global_.colors_view(), settings_.voxel_filter, vf_ws_, merged);
-  global_ = std::move(merged);
+  refilter(global_);
 }
 
 const PointCloud& Mapper::cloud() {
@@ -132,12 +128,8 @@ const PointCloud& Mapper::cloud() {
   for (const Submap& sm : submaps_) {
     const std::size_t b = all.size();
     all.append(sm.cloud);
-    const float c = std::cos(sm.placement.theta), s = std::sin(sm.placement.theta);
     if (sm.placement.x == 0.0f && sm.placement.y == 0.0f && sm.placement.theta == 0.0f) continue;
-    for (std::size_t k = b; k < all.size(); ++k) {
-      Eigen::Vector3f& p = all.points[k];
-      p = Eigen::Vector3f(sm.placement.x + c * p.x() - s * p.y(), sm.placement.y + s * p.x() + c * p.y(), p.z());
-    }
+    for (std::size_t k = b; k < all.size(); ++k) all.points[k].head<2>() = transform_point(sm.placement, all.points[k].head<2>());
   }
   voxel_filter(all.points_view(), all.colors_view(), settings_.voxel_filter, vf_ws_, global_);
   cloud_dirty_ = false;

@@ -42,12 +42,17 @@ bool fits(const duet::Explorer& e, const duet::Pose2& goal, float needed) {
   return e.inflated().traversable[i] != 0 && e.local_grid().clearance_m[i] > needed;
 }
 
-TEST(Explorer, FrontierGoalIsMovedOffTheUnknownCells) {
-  const duet::Profile p = frontier_only_profile();
-  duet::Explorer e(p);
+// The explorer's first decision in half_known_room(), from (1.0, 1.5) facing +x.
+void decide_in_half_known_room(duet::Explorer& e) {
   const duet::Pose2 robot{1.0f, 1.5f, 0.0f};
   e.update_map(half_known_room(), robot, 0.0);
   (void)e.control(robot, duet::Twist{}, 0.0);
+}
+
+TEST(Explorer, FrontierGoalIsMovedOffTheUnknownCells) {
+  const duet::Profile p = frontier_only_profile();
+  duet::Explorer e(p);
+  decide_in_half_known_room(e);
   ASSERT_TRUE(e.goal().has_value());
   const duet::Pose2 decided = e.last_decision().goal;
   const duet::Pose2 goal = *e.goal();
@@ -714,9 +719,7 @@ namespace {
 TEST(Explorer, ShiftFrameMovesTheGoalThePathAndTheRecentObstacles) {
   const duet::Profile p = frontier_only_profile();
   duet::Explorer e(p);
-  const duet::Pose2 robot{1.0f, 1.5f, 0.0f};
-  e.update_map(half_known_room(), robot, 0.0);
-  (void)e.control(robot, duet::Twist{}, 0.0);
+  decide_in_half_known_room(e);
   ASSERT_TRUE(e.goal().has_value());
   ASSERT_FALSE(e.path().empty());
   const std::vector<Eigen::Vector2f> recent{{2.0f, 2.0f}};

@@ -5,6 +5,8 @@
 ///
 /// Frame: the map frame, x-y plane, theta counter-clockwise from +x [rad] (REP 103).
 /// Thread safety: pure functions; call from any thread.
+#include <Eigen/Core>
+
 #include <cmath>
 
 namespace duet {
@@ -26,6 +28,12 @@ struct Pose2 {
 [[nodiscard]] inline Pose2 inverse(const Pose2& a) noexcept {
   const float c = std::cos(a.theta), s = std::sin(a.theta);
   return {-(c * a.x + s * a.y), -(-s * a.x + c * a.y), -a.theta};
+}
+
+/// T p: the point p, given in T's frame, in T's parent frame.
+[[nodiscard]] inline Eigen::Vector2f transform_point(const Pose2& T, const Eigen::Vector2f& p) noexcept {
+  const float c = std::cos(T.theta), s = std::sin(T.theta);
+  return {T.x + c * p.x() - s * p.y(), T.y + s * p.x() + c * p.y()};
 }
 
 /// A velocity command of a differential-drive chassis.

@@ -83,6 +83,7 @@ class Mapper {
 
  private:
   void compact();
+  void refilter(PointCloud& cloud);  // voxel filter in place (mapping leaf size)
 
   MappingSettings settings_;
   Eigen::Isometry3f T_map_world_;
