@@ -8,9 +8,9 @@
 // The renderer (mesh + BVH) is built once outside the timed loop; frame seeds vary per iteration.
 #include "bench_util.hpp"
 
-#include <duet/runtime/profile.hpp>
-#include <duet/runtime/sim/renderer.hpp>
-#include <duet/runtime/sim/world.hpp>
+#include <duet/runtime/config/profile.hpp>
+#include <duet/sim/renderer.hpp>
+#include <duet/sim/world.hpp>
 
 #include <cmath>
 #include <memory>

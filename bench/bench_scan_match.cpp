@@ -12,7 +12,7 @@
 #include "bench_util.hpp"
 
 #include <duet/kernels/scan_match.hpp>
-#include <duet/runtime/loop_closure.hpp>
+#include <duet/runtime/localization/loop_closure.hpp>
 
 #include <cmath>
 #include <numbers>

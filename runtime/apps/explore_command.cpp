@@ -5,12 +5,12 @@
 #include "commands.hpp"
 
 #include <duet/kernels/error.hpp>
-#include <duet/runtime/cloud_io.hpp>
-#include <duet/runtime/grid_io.hpp>
-#include <duet/runtime/plot.hpp>
-#include <duet/runtime/profile.hpp>
-#include <duet/runtime/sim/sim_explore.hpp>
-#include <duet/runtime/sim/world.hpp>
+#include <duet/runtime/io/cloud_io.hpp>
+#include <duet/runtime/io/grid_io.hpp>
+#include <duet/runtime/io/plot.hpp>
+#include <duet/runtime/config/profile.hpp>
+#include <duet/sim/sim_explore.hpp>
+#include <duet/sim/world.hpp>
 
 #include <nlohmann/json.hpp>
 #include <tbb/task_arena.h>
@@ -36,6 +36,7 @@ struct ExploreOptions {
   std::string sensor_rate = "pipeline";
   int threads = 0;
   bool realtime = false;
+  std::string execution = "auto";
   bool true_pose = false;
   bool raw_odometry = false;
   float recent_obstacles_s = 0.0f;
@@ -126,6 +127,21 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                {"scan_matches", s.scan_matches},
                {"scan_match_rejected", s.scan_match_rejected},
                {"scan_match_time_s", s.scan_match_time_s}};
+  auto latency = [](const LatencySummary& l) {
+    return nlohmann::json{{"count", l.count}, {"p50_ms", 1e3 * l.p50_s}, {"p99_ms", 1e3 * l.p99_s}, {"max_ms", 1e3 * l.max_s},
+                          {"mean_ms", 1e3 * l.mean_s}};
+  };
+  const RuntimeTiming& tm = s.timing;
+  j["runtime"] = {{"execution", to_string(s.execution)},
+                  {"paced_by_wall_clock", s.realtime},
+                  {"nominal_period_ms", 1e3 * tm.nominal_period_s},
+                  {"control_period", latency(tm.control_period)},
+                  {"command_latency", latency(tm.command_latency)},
+                  {"frame_to_map", latency(tm.frame_to_map)},
+                  {"decision", latency(tm.decision)},
+                  {"late_periods", tm.late_periods},
+                  {"missed_periods", tm.missed_periods},
+                  {"map_sets_skipped", s.map_sets_skipped}};
   j["loop_closure"] = {{"enabled", s.loop_closure},
                        {"checks", s.loops.checks},
                        {"matches", s.loops.matches},
@@ -275,13 +291,16 @@ int run_explore(const ExploreOptions& o) {
   Profile profile = resolve_profile(o.profile);
   sim::ExploreSettings es = make_settings(profile, o.seed, o.max_time, rate);
   es.realtime = o.realtime;
+  if (o.execution == "background" || (o.execution == "auto" && o.realtime)) es.runtime.execution = Execution::kBackground;
+  else if (o.execution != "lockstep" && o.execution != "auto")
+    fail(ErrorCode::kInvalidArgument, "--execution '" + o.execution + "': expected auto, lockstep or background");
   es.use_true_pose = o.true_pose;
-  es.pose_correction.enabled = !o.raw_odometry;
-  es.loop_closure.enabled = !o.no_loop_closure;
-  es.explorer.recent_obstacles_s = o.recent_obstacles_s;
-  es.explorer.cornered_after_s = o.cornered_after_s;
-  if (o.slow_clearance_m >= 0.0f) es.explorer.slow_clearance_m = o.slow_clearance_m;
-  if (o.slow_speed_mps >= 0.0f) es.explorer.slow_speed_mps = o.slow_speed_mps;
+  es.runtime.pose_correction.enabled = !o.raw_odometry;
+  es.runtime.loop_closure.enabled = !o.no_loop_closure;
+  es.runtime.explorer.recent_obstacles_s = o.recent_obstacles_s;
+  es.runtime.explorer.cornered_after_s = o.cornered_after_s;
+  if (o.slow_clearance_m >= 0.0f) es.runtime.explorer.slow_clearance_m = o.slow_clearance_m;
+  if (o.slow_speed_mps >= 0.0f) es.runtime.explorer.slow_speed_mps = o.slow_speed_mps;
   if (o.gyro_noise != 0.0f) {
     es.chassis = sim::ChassisSimSettings::from_profile(profile.chassis);
     es.chassis->gyro_heading = true;  // as the default chassis (the Kobuki's gyro heading)
@@ -296,8 +315,12 @@ int run_explore(const ExploreOptions& o) {
                    static_cast<unsigned long long>(o.seed), o.max_time, o.realtime ? ", real time" : "",
                    o.true_pose ? ", TRUE POSE (debugging)" : "");
     sim::SimExplore run(std::move(world), std::move(profile), es);
+    double next_line = 0.0;  // not a terminal: a line every 10 simulated s (a terminal: one line, updated in place)
     run.run([&](const sim::SimExplore& r) {
-      if (!o.quiet) print_progress(r, tty, "");
+      if (o.quiet) return;
+      if (!tty && r.running() && r.now_s() + 1e-9 < next_line) return;
+      print_progress(r, tty, "");
+      next_line = r.now_s() + 10.0;
     });
     if (tty) std::fputc('\n', stderr);
     write_outputs(run, o.out);
@@ -404,7 +427,12 @@ void add_explore_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--sensor-rate", o->sensor_rate,
                   "render rate: pipeline (what the mapper consumes, 1 Hz), full (the profile's 30 Hz) or a rate in Hz")
       ->capture_default_str();
-  cmd->add_flag("--realtime", o->realtime, "pace the simulation by the wall clock");
+  cmd->add_flag("--realtime", o->realtime, "pace the simulation by the wall clock (the runtime then runs in the background mode)");
+  cmd->add_option("--execution", o->execution,
+                  "runtime execution: lockstep (map updates and decisions inside the control period: deterministic), background "
+                  "(they run as background tasks and control never waits, as on a robot) or auto (background with --realtime)")
+      ->check(CLI::IsMember({"auto", "lockstep", "background"}))
+      ->capture_default_str();
   cmd->add_flag("--true-pose", o->true_pose, "DEBUGGING: map with the true pose instead of the wheel odometry");
   cmd->add_flag("--raw-odometry", o->raw_odometry, "pose = the raw wheel odometry (no scan-to-map correction)");
   cmd->add_option("--recent-obstacles", o->recent_obstacles_s,

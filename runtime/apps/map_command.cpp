@@ -5,11 +5,11 @@
 #include <duet/kernels/error.hpp>
 #include <duet/kernels/normals.hpp>
 #include <duet/kernels/voxel_filter.hpp>
-#include <duet/runtime/cloud_io.hpp>
-#include <duet/runtime/grid_io.hpp>
-#include <duet/runtime/mapper.hpp>
-#include <duet/runtime/profile.hpp>
-#include <duet/runtime/rgbd_dataset.hpp>
+#include <duet/runtime/io/cloud_io.hpp>
+#include <duet/runtime/io/grid_io.hpp>
+#include <duet/runtime/mapping/mapper.hpp>
+#include <duet/runtime/config/profile.hpp>
+#include <duet/runtime/io/rgbd_dataset.hpp>
 
 #include <nlohmann/json.hpp>
 #include <tbb/task_arena.h>

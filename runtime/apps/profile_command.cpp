@@ -1,7 +1,7 @@
 // `duet profile [NAME|FILE]`: prints a built-in profile's YAML, or validates a profile file.
 #include "commands.hpp"
 
-#include <duet/runtime/profile.hpp>
+#include <duet/runtime/config/profile.hpp>
 
 #include <cstdio>
 #include <filesystem>

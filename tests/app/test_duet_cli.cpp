@@ -1,6 +1,6 @@
 // The `duet` program run as a user runs it: exit codes, outputs, and error messages.
-#include <duet/runtime/cloud_io.hpp>
-#include <duet/runtime/grid_io.hpp>
+#include <duet/runtime/io/cloud_io.hpp>
+#include <duet/runtime/io/grid_io.hpp>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

@@ -2,7 +2,7 @@
 // the wall clock scaled by its rate and really sleeps. No upper bound on any duration is asserted
 // (the machine is shared); lower bounds follow from the sleep's contract.
 #include <duet/kernels/error.hpp>
-#include <duet/runtime/clock.hpp>
+#include <duet/runtime/robot/clock.hpp>
 
 #include <gtest/gtest.h>
 

@@ -3,7 +3,7 @@
 // and corrupt files (every truncation, random byte flips, huge declared sizes) that must give
 // a duet::Error naming the problem, never a crash.
 #include <duet/kernels/error.hpp>
-#include <duet/runtime/cloud_io.hpp>
+#include <duet/runtime/io/cloud_io.hpp>
 
 #include <gtest/gtest.h>
 

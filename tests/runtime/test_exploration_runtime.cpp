@@ -1,50 +1,30 @@
 // ExplorationRuntime on scripted robot interfaces (no simulator): synchronisation, map rate,
 // counted drops when a sensor stops, idle without a map, and bad wiring.
 #include <duet/kernels/error.hpp>
-#include <duet/runtime/exploration_runtime.hpp>
-#include <duet/runtime/profile.hpp>
+#include <duet/runtime/robot/exploration_runtime.hpp>
+#include <duet/runtime/config/profile.hpp>
 
 #include <gtest/gtest.h>
+
+#include "scripted_robot.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
 namespace {
+using duet_test::ScriptedChassis;
+using duet_test::ScriptedSensor;
+using duet_test::StandingRobot;
+using duet_test::wall_frame;
 
-struct ScriptedChassis : duet::ChassisInterface {
-  std::vector<duet::OdometryMsg> pending;
-  std::vector<duet::Twist> commands;
-  void command(const duet::Twist& cmd) override { commands.push_back(cmd); }
-  std::vector<duet::OdometryMsg> take_odometry() override {
-    std::vector<duet::OdometryMsg> out;
-    out.swap(pending);
-    return out;
-  }
-};
-
-struct ScriptedSensor : duet::RgbdSensorInterface {
-  std::vector<duet::StampedRgbd> pending;
-  int recycled = 0;
-  std::vector<duet::StampedRgbd> take_frames() override {
-    std::vector<duet::StampedRgbd> out;
-    out.swap(pending);
-    return out;
-  }
-  void recycle(duet::RgbdImage&&) override { ++recycled; }
-};
-
-// A frame of a wall 2 m ahead (depth only), the profile's image size.
-duet::StampedRgbd wall_frame(const duet::SensorProfile& s, double stamp) {
-  duet::StampedRgbd f;
-  f.stamp_s = stamp;
-  f.image.width = s.intrinsics.width;
-  f.image.height = s.intrinsics.height;
-  f.image.depth.assign(static_cast<std::size_t>(f.image.width) * f.image.height,
-                       static_cast<std::uint16_t>(2.0f * s.depth_units_per_m));
-  return f;
+duet::RuntimeSettings one_hertz(float recent_obstacles_s) {
+  duet::RuntimeSettings rs;
+  rs.sensor_rate_hz = 1.0;
+  rs.pose_correction.enabled = false;
+  rs.explorer.recent_obstacles_s = recent_obstacles_s;
+  return rs;
 }
-
 }  // namespace
 
 TEST(ExplorationRuntime, IntegratesSynchronizedSetsAtTheMapRate) {
@@ -80,39 +60,6 @@ TEST(ExplorationRuntime, IntegratesSynchronizedSetsAtTheMapRate) {
   for (const auto& c : chassis.commands) EXPECT_TRUE(std::isfinite(c.v) && std::isfinite(c.omega));
 }
 
-// A robot standing at the odometry origin, ticked at 20 Hz with odometry at every tick and a
-// frame pair once a second: the front Kinect sees a wall front_depth ahead, the right one a
-// wall 2 m to the right.
-struct StandingRobot {
-  duet::Profile profile = duet::builtin_profile("dual");
-  ScriptedChassis chassis;
-  ScriptedSensor front, right;
-  duet::RgbdSensorInterface* sensors[2] = {&front, &right};
-  duet::ExplorationRuntime rt;
-  float front_depth = 2.0f;
-  explicit StandingRobot(const duet::RuntimeSettings& rs) : rt(profile, chassis, sensors, rs) {}
-  void run(int from, int to) {  // ticks [from, to) at t = 0.05 k
-    for (int k = from; k < to; ++k) {
-      const double t = 0.05 * k;
-      chassis.pending.push_back({t, {}, {}});
-      if (k % 20 == 0) {
-        duet::StampedRgbd f = wall_frame(profile.sensors[0], t);
-        std::fill(f.image.depth.begin(), f.image.depth.end(), static_cast<std::uint16_t>(front_depth * 1000.0f));
-        front.pending.push_back(std::move(f));
-        right.pending.push_back(wall_frame(profile.sensors[1], t));
-      }
-      rt.tick(t);
-    }
-  }
-};
-
-duet::RuntimeSettings one_hertz(float recent_obstacles_s) {
-  duet::RuntimeSettings rs;
-  rs.sensor_rate_hz = 1.0;
-  rs.pose_correction.enabled = false;
-  rs.explorer.recent_obstacles_s = recent_obstacles_s;
-  return rs;
-}
 
 // Recent obstacles (ExplorerSettings::recent_obstacles_s): the mapper's obstacle cells within
 // recent_obstacle_range_m of the robot, kept in the odometry frame and placed in the map frame

@@ -2,8 +2,8 @@
 // a cell the dynamic window can stand on (global traversable, clear of unknown cells by the
 // window's radius), re-checked at map updates, and abandoned when no such cell is near.
 #include <duet/kernels/error.hpp>
-#include <duet/runtime/explorer.hpp>
-#include <duet/runtime/profile.hpp>
+#include <duet/runtime/navigation/explorer.hpp>
+#include <duet/runtime/config/profile.hpp>
 
 #include <gtest/gtest.h>
 

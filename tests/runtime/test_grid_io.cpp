@@ -2,7 +2,7 @@
 // semantics (flip, origin, negate, thresholds, trinary/scale/raw, P2/P5/PNG) against a plain
 // reference; errors naming the file and key; corrupt images; the PNG picture and its overlays.
 #include <duet/kernels/error.hpp>
-#include <duet/runtime/grid_io.hpp>
+#include <duet/runtime/io/grid_io.hpp>
 
 #include <gtest/gtest.h>
 

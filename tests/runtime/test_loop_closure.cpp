@@ -4,12 +4,12 @@
 // (without it the error grows to ~0.6 m), and its rebuilt grid must agree with the world better
 // than the drifted one. Plus the mapper's submap bookkeeping and the settings' errors.
 #include <duet/kernels/error.hpp>
-#include <duet/runtime/loop_closure.hpp>
-#include <duet/runtime/mapper.hpp>
-#include <duet/runtime/profile.hpp>
-#include <duet/runtime/robot_io.hpp>
-#include <duet/runtime/sim/renderer.hpp>
-#include <duet/runtime/sim/world.hpp>
+#include <duet/runtime/localization/loop_closure.hpp>
+#include <duet/runtime/mapping/mapper.hpp>
+#include <duet/runtime/config/profile.hpp>
+#include <duet/runtime/robot/robot_io.hpp>
+#include <duet/sim/renderer.hpp>
+#include <duet/sim/world.hpp>
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // Profiles: the shipped YAML files carry the paper's values (§4.1, Eq. (6)), and every kind of
 // bad input is an error naming the file and the key path.
 #include <duet/kernels/error.hpp>
-#include <duet/runtime/profile.hpp>
+#include <duet/runtime/config/profile.hpp>
 
 #include <gtest/gtest.h>
 

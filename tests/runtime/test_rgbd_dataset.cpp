@@ -3,7 +3,7 @@
 #include <duet/kernels/back_projection.hpp>
 #include <duet/kernels/error.hpp>
 #include <duet/kernels/kdtree.hpp>
-#include <duet/runtime/rgbd_dataset.hpp>
+#include <duet/runtime/io/rgbd_dataset.hpp>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>

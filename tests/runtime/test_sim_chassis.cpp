@@ -3,8 +3,8 @@
 // slip model predicts, determinism, odometry at 50 Hz, collisions with a wall (stop, one count,
 // outside the wall, backing out) and invalid settings.
 #include <duet/kernels/error.hpp>
-#include <duet/runtime/profile.hpp>
-#include <duet/runtime/sim/chassis.hpp>
+#include <duet/runtime/config/profile.hpp>
+#include <duet/sim/chassis.hpp>
 
 #include <gtest/gtest.h>
 

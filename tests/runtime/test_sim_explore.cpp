@@ -1,10 +1,10 @@
 // The simulated exploration run end to end (issue 4): a small world is explored, the run is
 // repeatable for a seed whatever the thread count, and the robot does not collide.
 #include <duet/kernels/error.hpp>
-#include <duet/runtime/plot.hpp>
-#include <duet/runtime/profile.hpp>
-#include <duet/runtime/sim/sim_explore.hpp>
-#include <duet/runtime/sim/world.hpp>
+#include <duet/runtime/io/plot.hpp>
+#include <duet/runtime/config/profile.hpp>
+#include <duet/sim/sim_explore.hpp>
+#include <duet/sim/world.hpp>
 
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
@@ -123,13 +123,13 @@ TEST(SimExplore, NoCollisionOverFiveSeeds) {
 TEST(SimExplore, ScanMatchingHoldsAGyroDriftThatTheOdometryDoesNot) {
   auto run_with = [](bool correct, double reference_age_s = duet::PoseCorrectionSettings{}.reference_age_s) {
     auto s = settings(5, 200.0);
-    s.pose_correction.reference_age_s = reference_age_s;
+    s.runtime.pose_correction.reference_age_s = reference_age_s;
     const duet::Profile p = duet::builtin_profile("dual_kinect_kobuki");
     duet::sim::ChassisSimSettings c = duet::sim::ChassisSimSettings::from_profile(p.chassis);
     c.gyro_heading = true;
     c.gyro_bias_std_radps = 0.0006f;
     s.chassis = c;
-    s.pose_correction.enabled = correct;
+    s.runtime.pose_correction.enabled = correct;
     duet::sim::SimExplore run(duet::sim::resolve_world("lab"), p, s);
     run.run();
     return run.summary();
@@ -178,27 +178,27 @@ TEST(SimExplore, InvalidSettingsAreErrorsThatNameTheField) {
   s.max_time_s = -1.0;
   EXPECT_NE(message(s).find("max_time_s"), std::string::npos);
   s = settings(1, 10.0);
-  s.map_rate_hz = 50.0;  // above the control rate
+  s.runtime.map_rate_hz = 50.0;  // above the control rate
   EXPECT_NE(message(s).find("map_rate_hz"), std::string::npos);
   s = settings(1, 10.0);
   s.sensor_rate_hz = 0.5;  // below the map rate
   EXPECT_NE(message(s).find("sensor_rate_hz"), std::string::npos);
   s = settings(1, 10.0);
-  s.pose_correction.gain = 0.0f;
+  s.runtime.pose_correction.gain = 0.0f;
   EXPECT_NE(message(s).find("PoseCorrectionSettings::gain"), std::string::npos);
   s = settings(1, 10.0);
-  s.pose_correction.match.sigma_m = -1.0f;
+  s.runtime.pose_correction.match.sigma_m = -1.0f;
   EXPECT_NE(message(s).find("ScanMatchSettings::sigma_m"), std::string::npos);
   s = settings(1, 10.0);
-  s.pose_correction.min_height_m = 2.0f;  // above max_height_m
+  s.runtime.pose_correction.min_height_m = 2.0f;  // above max_height_m
   EXPECT_NE(message(s).find("min_height_m"), std::string::npos);
   s = settings(1, 10.0);
-  s.pose_correction.rate_gain_initial = 0.001f;  // below rate_gain
+  s.runtime.pose_correction.rate_gain_initial = 0.001f;  // below rate_gain
   EXPECT_NE(message(s).find("PoseCorrectionSettings::rate_gain_initial"), std::string::npos);
   s = settings(1, 10.0);
-  s.pose_correction.reference_age_s = -1.0;
+  s.runtime.pose_correction.reference_age_s = -1.0;
   EXPECT_NE(message(s).find("PoseCorrectionSettings::reference_age_s"), std::string::npos);
-  s.pose_correction.reference_age_s = std::nan("");
+  s.runtime.pose_correction.reference_age_s = std::nan("");
   EXPECT_NE(message(s).find("PoseCorrectionSettings::reference_age_s"), std::string::npos);
   // A world whose start collides is refused by the chassis.
   auto w = two_rooms();

@@ -3,12 +3,12 @@
 // statistics, determinism (seeds, thread count), texture features and settings validation.
 #include <duet/kernels/back_projection.hpp>
 #include <duet/kernels/error.hpp>
-#include <duet/runtime/profile.hpp>
-#include <duet/runtime/sim/renderer.hpp>
-#include <duet/runtime/sim/world.hpp>
+#include <duet/runtime/config/profile.hpp>
+#include <duet/sim/renderer.hpp>
+#include <duet/sim/world.hpp>
 
 #if defined(__SSE2__)
-#include "../../runtime/src/sim/texture_simd.hpp"  // internal: the renderer's SSE2 texture path
+#include "../../runtime/sim/src/texture_simd.hpp"  // internal: the renderer's SSE2 texture path
 #endif
 
 #include <gtest/gtest.h>

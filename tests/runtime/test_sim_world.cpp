@@ -1,8 +1,8 @@
 // Simulated worlds: the lab replica keeps the paper's facts (§4.2, Fig. 9), the loaders reject
 // bad files with the file and the key, and the geometry queries agree with plain references.
 #include <duet/kernels/error.hpp>
-#include <duet/runtime/grid_io.hpp>
-#include <duet/runtime/sim/world.hpp>
+#include <duet/runtime/io/grid_io.hpp>
+#include <duet/sim/world.hpp>
 
 #include <gtest/gtest.h>
 

@@ -4,7 +4,7 @@
 // without inter-message lower bounds; drops counted per stream and reason; bounded queues with a
 // silent stream; perfect sync emits at once; payloads are moved, never copied.
 #include <duet/kernels/error.hpp>
-#include <duet/runtime/synchronizer.hpp>
+#include <duet/runtime/robot/synchronizer.hpp>
 
 #include <gtest/gtest.h>
 

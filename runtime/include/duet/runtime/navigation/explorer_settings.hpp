@@ -1,0 +1,131 @@
+#pragma once
+/// @file explorer_settings.hpp
+/// Settings, state and counters of the explorer (navigation room): the goal life cycle
+/// (Navigator, navigator.hpp) and the controller that follows its goals (Controller,
+/// controller.hpp). Measurement history of these values lives in bench/RESULTS.md.
+#include <duet/kernels/exploration.hpp>
+#include <duet/kernels/motion_model.hpp>
+
+#include <Eigen/Core>
+
+#include <cstddef>
+
+namespace duet {
+
+struct ExplorerSettings {
+  // ---- goal life cycle (Navigator)
+  float goal_timeout_s = 20.0f;       ///< fixed part of a goal's time limit [s], (0, inf)
+  float nominal_speed_mps = 0.3f;     ///< path length / this is added to the time limit [m/s], (0, inf)
+  float blacklist_ttl_s = 60.0f;      ///< how long an abandoned goal stays blacklisted [s], (0, inf]
+  int final_retries = 3;              ///< decisions at later map updates before giving up, [0, 1000]
+  /// Exploration is complete when no reachable frontier is left, even if the partial map
+  /// simulation still offers a goal: its reward (Eq. 5) never reaches zero, because known cells
+  /// below the log-odds clamp keep gaining from re-observation, so R_g <= eps_R alone never
+  /// ends a run. Costs one frontier search per simulated goal. false: the paper's rule only.
+  bool stop_when_no_frontier = true;
+  /// How far a goal may be moved off cells next to unknown space to a cell the dynamic window
+  /// can stand on [m], [0, 5]; 0 = never (such a goal is abandoned).
+  float goal_standoff_search_m = 0.75f;
+  /// Relaxed grid: when the frontier search reaches no goal, it runs again with the robot's
+  /// radius shrunk to the chassis' radius + this margin [m], [0, 1] (a door whose jambs, once
+  /// fully seen, close under the inflation).
+  float squeeze_margin_m = 0.06f;
+  /// Shrink the radius whenever the search reaches no goal (true), or only when boxed in (false).
+  bool squeeze_anywhere = false;
+  /// With squeeze_anywhere, only towards unknown regions at least this large [m^2], [0, inf).
+  float squeeze_min_unknown_m2 = 4.0f;
+  /// Boxed in: the search reached less than this traversable area from the robot [m^2],
+  /// [0, inf); 0 = never. Then observed-but-uncertain cells stop blocking too (a door that
+  /// grazing rays left uncertain).
+  float boxed_in_area_m2 = 10.0f;
+  /// View goals: when no frontier can be gone to, look at the unreachable frontier cells from a
+  /// cell the robot can stand on, on a straight line of known-free cells, view_min_range_m to
+  /// view_range_m from the frontier cell (the nearest by path; each frontier cell looked at
+  /// once). [m], [0, 10]; 0 = no view goals.
+  float view_range_m = 4.0f;
+  /// Nearest view cell to its frontier cell [m], [0, view_range_m] ([0, 10] with no view goals):
+  /// beyond the sensors' minimum range plus the sensor's offset behind the robot's centre.
+  float view_min_range_m = 0.8f;
+  int view_rays = 72;  ///< directions cast from each frontier cell (evenly over 360 deg), [4, 3600]
+  /// Recent obstacles (a local costmap's obstacle layer): cells an obstacle point of the last
+  /// recent_obstacles_s seconds fell in block the dynamic window's grid, whatever the map's
+  /// log-odds say (where the pose moved since a place was mapped, the map needs several hits to
+  /// block a cell it saw free many times). [s], [0, 3600]; 0 = off.
+  float recent_obstacles_s = 0.0f;
+  /// ... only points within this distance of the robot when seen [m], (0, 10].
+  float recent_obstacle_range_m = 3.0f;
+  /// ... only cells seen as an obstacle in at least this many of the window's scans, [1, 1000].
+  int recent_obstacle_min_scans = 2;
+
+  // ---- controller behaviours (Controller)
+  float stuck_timeout_s = 4.0f;       ///< no admissible trajectory for this long abandons the goal [s], (0, inf)
+  /// Stall: commanded forward (>= 0.03 m/s) while the odometry measures no motion (< 0.01 m/s)
+  /// for this long [s], (0, inf): the robot touches something its sensors cannot see (nearer
+  /// than their minimum range). A contact obstacle goes just ahead of it in every grid the
+  /// explorer plans and drives on, and the goal is abandoned.
+  float stall_timeout_s = 1.0f;
+  float contact_radius_m = 0.10f;     ///< radius of a contact obstacle [m], (0, 1]
+  /// Cornered: the dynamic window kept the robot within 0.1 m of one spot this long [s],
+  /// [0, inf); 0 = off. It then creeps towards more clearance until out of that spot.
+  float cornered_after_s = 0.0f;
+  /// Slow zone (nav2's speed filter): the top speed falls with the clearance on the planning
+  /// grid, linearly from the profile's max_v_mps at slow_clearance_m to slow_speed_mps at the
+  /// window's margin, so the sensors' new hits reach the map before the robot does.
+  /// [m], [0, 10]; 0 = off.
+  float slow_clearance_m = 0.8f;
+  float slow_speed_mps = 0.25f;       ///< the top speed at the margin [m/s], (0, inf)
+};
+void validate(const ExplorerSettings& s);
+
+enum class ExplorerState {
+  kIdle,        ///< no map yet
+  kExploring,   ///< following a goal
+  kDone,        ///< stopped; see stop_status()
+};
+
+/// Counters and timings of one run (decision time is the wall time of a decision).
+struct ExplorerStats {
+  int decisions = 0;              ///< decide_goal() calls
+  int simulated_goals = 0;        ///< goals from the partial map simulation
+  int frontier_goals = 0;         ///< goals from the frontier fallback (R_g <= eps_R)
+  int goals_reached = 0;
+  int goals_abandoned_timeout = 0;
+  int goals_abandoned_no_path = 0;
+  int goals_abandoned_stuck = 0;
+  int goals_abandoned_blocked = 0;   ///< goal cell became occupied or non-traversable
+  int replans = 0;
+  int local_fallbacks = 0;          ///< control periods the dynamic window fell back to the global grid
+  int escapes = 0;                  ///< control periods spent escaping the dynamic window's margin
+  int cornered_escapes = 0;         ///< control periods spent escaping a spot (cornered_after_s)
+  int slowed = 0;                   ///< control periods the slow zone lowered the top speed
+  int goals_moved = 0;              ///< goals moved off cells next to unknown space (decisions and re-checks)
+  int relaxed_goals = 0;            ///< frontier goals found on a relaxed grid
+  int boxed_in_goals = 0;           ///< of relaxed_goals, those with uncertain cells not blocking
+  int stalls = 0;                   ///< stalls detected: contact obstacles placed
+  int view_goals = 0;               ///< view goals taken
+  int view_goals_reached = 0;       ///< of view_goals, those reached and looked from
+  /// Sum over map updates of the cells the recent obstacles made blocking.
+  std::size_t recent_obstacle_cells = 0;
+  double decision_time_sum_s = 0.0;
+  double decision_time_max_s = 0.0;
+};
+
+/// One decision, for the run's log.
+struct DecisionRecord {
+  double t_s = 0.0;                 ///< runtime clock
+  ExplorationStatus status = ExplorationStatus::kNoFrontier;
+  float reward_bits = 0.0f;         ///< R_g of the partial map simulation
+  Pose2 robot;                      ///< where the robot was
+  Pose2 goal;                       ///< the goal (if any)
+  bool planned = false;             ///< a path to the goal was found
+  std::size_t frontier_cells = 0;   ///< frontier cells in kept clusters (when the search ran)
+  int reachable_clusters = 0;       ///< frontier clusters the robot can reach (when the search ran)
+  std::size_t reached_cells = 0;    ///< cells the frontier search reached from the robot (when it ran)
+  bool relaxed = false;             ///< the goal came from the search on the relaxed grid
+  bool view = false;                ///< the goal is a view goal
+  Eigen::Vector2f view_target{0.0f, 0.0f};       ///< for a view goal: the frontier cell it looks at
+  Eigen::Vector2f nearest_frontier{0.0f, 0.0f};  ///< the nearest reachable cluster's nearest cell
+  double wall_time_s = 0.0;         ///< how long the decision took
+};
+
+}  // namespace duet

@@ -1,0 +1,183 @@
+#pragma once
+/// @file navigator.hpp
+/// The planning half of the explorer (paper §3, Fig. 6): the costmaps of the latest map, the
+/// goal life cycle and the global path. The Controller (controller.hpp) follows what it
+/// publishes (NavPlanView); the Explorer (explorer.hpp) composes the two on one thread, the
+/// runtime (exploration_runtime.hpp) runs the Navigator as a background task and the
+/// Controller on the control thread.
+///
+/// Costmaps (update_map(), at the map rate): the observation model of the map (Procedure 1's
+/// reward), the planning grid (the map with the contact obstacles, inflated), the dynamic
+/// window's grid (unknown cells are obstacles - an RGB-D sensor sees nothing nearer than its
+/// minimum range, so driving into unknown space near the robot is driving blind - except under
+/// the body's trail and at the start; the recent obstacles block) and, while a relaxed goal is
+/// active, the relaxed grid.
+///
+/// Goal life cycle (the paper: "a new goal when the last is reached or its time limit passes"):
+///  - decide() takes a decision when there is no goal: goal selection tries, in order, the
+///    partial map simulation (Procedure 1), the frontier search, the frontier search on the
+///    relaxed grid, and view goals (see ExplorerSettings); a goal is moved to a cell the
+///    dynamic window can stand on (standoff), then a path is planned (A* on the planning grid);
+///  - a frontier goal reached and looked at is blacklisted for good; a goal abandoned (time
+///    limit, no path, stuck, blocked) for blacklist_ttl_s; a view goal's frontier cell is
+///    never looked at again;
+///  - update_map() re-checks the goal (moved again or abandoned when blocked) and re-plans;
+///  - exploration ends with the decision's status after final_retries decisions without a
+///    goal at later map updates.
+///
+/// Frames: map frame (the grid given to update_map()). Thread safety: not thread-safe (one
+/// thread at a time); the kernels run TBB-parallel in the caller's task arena, and the
+/// results do not depend on the thread count.
+#include <duet/kernels/dwa.hpp>
+#include <duet/kernels/exploration.hpp>
+#include <duet/kernels/grid.hpp>
+#include <duet/kernels/inflation.hpp>
+#include <duet/kernels/observation.hpp>
+#include <duet/kernels/path.hpp>
+#include <duet/runtime/config/profile.hpp>
+#include <duet/runtime/navigation/explorer_settings.hpp>
+#include <duet/runtime/robot/latency.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+namespace duet {
+
+/// What the controller follows: a read-only view of the navigator's goal and grids (valid
+/// until the navigator is next changed) or of a snapshot of them (NavSnapshot).
+struct NavPlanView {
+  ExplorerState state = ExplorerState::kIdle;
+  bool have_map = false;
+  bool wait_for_map = false;          ///< the last decision found nothing: no new one before the next map
+  std::uint64_t goal_id = 0;          ///< changes with every new goal (0: none yet)
+  const Pose2* goal = nullptr;        ///< nullptr: no goal
+  std::span<const Eigen::Vector2f> path;
+  double deadline_s = 0.0;            ///< the goal's time limit (runtime clock)
+  DwaSettings dwa;                    ///< the profile's, with the relaxed radius while a relaxed goal is active
+  const InflatedGrid* local = nullptr;     ///< the dynamic window's grid
+  const InflatedGrid* planning = nullptr;  ///< the grid paths are planned on
+  [[nodiscard]] bool has_goal() const noexcept { return goal != nullptr; }
+};
+
+/// A copy of a NavPlanView that owns its data (handed from a background task to the control thread).
+struct NavSnapshot {
+  ExplorerState state = ExplorerState::kIdle;
+  ExplorationStatus stop_status = ExplorationStatus::kNoFrontier;
+  bool have_map = false;
+  bool wait_for_map = false;
+  std::uint64_t goal_id = 0;
+  std::optional<Pose2> goal;
+  std::vector<Eigen::Vector2f> path;
+  double deadline_s = 0.0;
+  DwaSettings dwa;
+  InflatedGrid local, planning;
+  [[nodiscard]] NavPlanView view() const;
+};
+
+/// Why the controller gave a goal up.
+enum class AbandonReason { kTimeout, kStuck };
+
+class Navigator {
+ public:
+  explicit Navigator(const Profile& profile, const ExplorerSettings& settings = {});
+
+  /// The latest map: rebuilds the costmaps, re-checks and re-plans the current goal.
+  void update_map(const OccupancyGrid& grid, const Pose2& robot, double now_s);
+  /// A decision (when there is no goal and the last decision did not ask to wait for a map).
+  void decide(const Pose2& robot, double now_s);
+  /// The recent obstacle points (map frame), used from the next update_map() on.
+  void set_recent_obstacles(std::span<const Eigen::Vector2f> points);
+  /// A robot position (map frame): the body's trail (kept 0.05 m apart) is free in the local grid.
+  void add_trail(const Eigen::Vector2f& p);
+
+  // Events from the controller; `goal_id` names the goal they are about (ignored if it is no longer the current one).
+  void goal_reached(std::uint64_t goal_id, double now_s);
+  void abandon(std::uint64_t goal_id, AbandonReason why, double now_s);
+  /// A stall: a contact obstacle at `contact` (map frame); abandons the goal; no decision before the next map.
+  void stall(const Eigen::Vector2f& contact, double now_s);
+
+  /// The map frame moved (loop closure): goal, path, trail, contacts, recent obstacles, view target move by D.
+  void shift(const Pose2& D);
+
+  [[nodiscard]] NavPlanView view() const;
+  [[nodiscard]] NavSnapshot snapshot() const;
+
+  [[nodiscard]] ExplorerState state() const noexcept { return state_; }
+  [[nodiscard]] ExplorationStatus stop_status() const noexcept { return stop_status_; }
+  [[nodiscard]] const ExplorerStats& stats() const noexcept { return stats_; }
+  [[nodiscard]] const std::optional<Pose2>& goal() const noexcept { return goal_; }
+  [[nodiscard]] const std::vector<Eigen::Vector2f>& path() const noexcept { return path_; }
+  [[nodiscard]] const InflatedGrid& inflated() const noexcept { return inflated_; }
+  [[nodiscard]] const InflatedGrid& planning_grid() const noexcept { return relaxed_active_ ? relaxed_ : inflated_; }
+  [[nodiscard]] const InflatedGrid& local_grid() const noexcept { return local_; }
+  [[nodiscard]] const std::vector<Eigen::Vector2f>& contacts() const noexcept { return contacts_; }
+  [[nodiscard]] const std::vector<Eigen::Vector2f>& recent_obstacles() const noexcept { return recent_; }
+  [[nodiscard]] const ExplorationDecision& last_decision() const noexcept { return decision_; }
+  [[nodiscard]] const std::vector<DecisionRecord>& decisions() const noexcept { return log_; }
+  [[nodiscard]] const std::vector<Eigen::Vector2f>& frontier_points() const noexcept { return frontier_xy_; }
+  [[nodiscard]] bool wait_for_map() const noexcept { return wait_for_map_; }
+  [[nodiscard]] std::uint64_t goal_id() const noexcept { return goal_id_; }
+  /// Wall time of each decide() that ran (all strategies, the standoff and the path) [s].
+  [[nodiscard]] const LatencyStats& decide_latency() const noexcept { return decide_latency_; }
+
+ private:
+  void mark_contacts(OccupancyGrid& g) const;
+  void mark_recent(OccupancyGrid& g);
+  bool plan(const Pose2& robot);
+  void abandon_goal(int& counter, double now_s);
+  void drop_goal();
+  [[nodiscard]] float dwa_clearance() const;
+  [[nodiscard]] DwaSettings dwa_settings() const;
+  [[nodiscard]] float relaxed_radius() const;
+  [[nodiscard]] bool can_stand_on(int x, int y) const;
+  [[nodiscard]] std::optional<Eigen::Vector2f> standoff(const Eigen::Vector2f& target) const;
+  bool recheck_goal();
+  void build_relaxed();
+  bool try_relaxed(const Pose2& robot, double now_s);
+  [[nodiscard]] std::optional<Pose2> find_view(const Pose2& robot, double now_s);
+
+  Profile profile_;
+  ExplorerSettings settings_;
+  std::vector<SensorSector> sectors_;
+  ObservationModel model_;
+  InflatedGrid inflated_;
+  InflatedGrid relaxed_;
+  bool relaxed_active_ = false;
+  bool relaxed_boxed_in_ = false;
+  InflatedGrid local_;
+  OccupancyGrid local_grid_{0.05f};
+  std::vector<Eigen::Vector2f> trail_;
+  std::vector<Eigen::Vector2f> contacts_;
+  std::vector<Eigen::Vector2f> recent_;
+  std::vector<std::size_t> recent_cells_;
+  OccupancyGrid contact_grid_{0.05f};
+  bool marked_ = false;
+  GoalBlacklist blacklist_;
+  GoalBlacklist viewed_;
+  bool view_active_ = false;
+  Eigen::Vector2f view_target_{0.0f, 0.0f};
+  FrontierWorkspace view_ws_;
+  ExplorationWorkspace ws_;
+  PathWorkspace path_ws_;
+  ExplorationDecision decision_;
+  ExplorerState state_ = ExplorerState::kIdle;
+  ExplorationStatus stop_status_ = ExplorationStatus::kNoFrontier;
+  ExplorerStats stats_;
+  bool have_map_ = false;
+  bool model_geometry_valid_ = false;
+  std::optional<Pose2> goal_;
+  std::uint64_t goal_id_ = 0;
+  Eigen::Vector2f goal_target_{0.0f, 0.0f};
+  std::vector<Eigen::Vector2f> path_;
+  double goal_deadline_s_ = 0.0;
+  int no_goal_decisions_ = 0;
+  bool wait_for_map_ = false;
+  std::uint64_t decision_seed_ = 0;
+  std::vector<DecisionRecord> log_;
+  std::vector<Eigen::Vector2f> frontier_xy_;
+  LatencyStats decide_latency_;
+};
+
+}  // namespace duet

@@ -1,0 +1,205 @@
+#pragma once
+/// @file exploration_runtime.hpp
+/// The exploration loop of a robot (DESIGN.md §3), independent of where the data comes from:
+/// it reads the ChassisInterface and RgbdSensorInterface of robot_io.hpp (the simulator, a
+/// recording, the C API or real drivers) and, once per control period (tick()):
+///  1. odometry and frames -> the approximate-time synchronizer (sensor 0..n-1, then odometry);
+///  2. a synchronized set at the map rate (paper §4.2: 1 Hz) -> a map update: the pose at the
+///     frames' time (wheel odometry interpolated, corrected by scan-to-map matching,
+///     PoseCorrector) -> the mapper -> loop closure (LoopCloser: the map frame may move, and
+///     what is kept in it moves too) -> the recent obstacles (ObstacleMemory) -> the
+///     navigator's costmaps and re-planned path (Navigator);
+///  3. control: the pose (latest odometry, corrected) -> the controller follows the
+///     navigator's path (Controller), asking it for a decision when it has no goal -> command.
+///
+/// Execution (RuntimeSettings::execution):
+///  - kLockstep: tick() runs the map update and any decision before it returns. Deterministic:
+///    the same inputs give the same commands, bit for bit, whatever the thread count. The
+///    simulator's default and single-threaded embedding.
+///  - kBackground: tick() never waits for a map update, a decision or loop closure. They run as
+///    background tasks (BackgroundWorker, in the runtime's own TBB arena of background_threads)
+///    and their results are taken by the first tick() after they finish; meanwhile the
+///    controller follows the current path, and stops (zero twist) when it has none. A map
+///    update due while the last one still runs is skipped (stats().map_sets_skipped). The
+///    controller's events (trail, stall, goal reached or abandoned) reach the navigator at the
+///    start of its next task.
+/// Until visual odometry exists the map frame is the odometry frame corrected by the matcher
+/// and the loop closer (with the correction off: the odometry frame itself).
+///
+/// Thread safety: one thread (the control thread) calls tick() and the accessors. In
+/// kBackground, mapper(), explorer() and loop_closer() belong to the background task: read
+/// them only after drain(); state(), stop_status(), explorer_stats() and map_grid() are safe.
+#include <duet/runtime/config/profile.hpp>
+#include <duet/runtime/localization/loop_closure.hpp>
+#include <duet/runtime/localization/pose_corrector.hpp>
+#include <duet/runtime/mapping/mapper.hpp>
+#include <duet/runtime/navigation/explorer.hpp>
+#include <duet/runtime/navigation/obstacle_memory.hpp>
+#include <duet/runtime/robot/latency.hpp>
+#include <duet/runtime/robot/robot_io.hpp>
+#include <duet/runtime/robot/synchronizer.hpp>
+
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <span>
+#include <unordered_map>
+#include <vector>
+
+namespace duet {
+
+class BackgroundWorker;
+
+enum class Execution { kLockstep, kBackground };
+[[nodiscard]] const char* to_string(Execution e);
+
+struct RuntimeSettings {
+  double control_rate_hz = 20.0;   ///< control and pose rate [Hz] (paper §4.2), (0, 1000]
+  double map_rate_hz = 1.0;        ///< map update rate [Hz] (paper §4.2), (0, control_rate_hz]
+  /// The rate the sensors deliver frames at [Hz], (0, 1000]: sizes the synchronizer's
+  /// odometry queue and gives its inter-message lower bounds (0.9 / rate).
+  double sensor_rate_hz = 30.0;
+  Execution execution = Execution::kLockstep;  ///< see the file comment
+  int background_threads = 0;      ///< kBackground: threads of the background arena, [0, 256]; 0 = all cores
+  /// FAULT INJECTION (tests): in kBackground every decision takes at least this long [s], [0, 60].
+  double decision_delay_s = 0.0;
+  ExplorerSettings explorer;
+  ApproximateTimeSettings sync;    ///< queue_size raised to hold two sensor periods of odometry
+  PoseCorrectionSettings pose_correction;
+  /// Submaps, loop search and pose-graph optimisation (loop_closure.hpp); needs the pose correction.
+  LoopClosureSettings loop_closure;
+};
+void validate(const RuntimeSettings& s);
+
+struct RuntimeStats {
+  std::size_t sets_integrated = 0;       ///< synchronized sets the mapper integrated
+  std::size_t sets_not_integrated = 0;   ///< sets between map times
+  std::size_t map_sets_skipped = 0;      ///< kBackground: sets due for a map update while the last one still ran
+  std::uint64_t frames_received = 0;
+  std::uint64_t frame_drops = 0;         ///< frames the synchronizer dropped (all sensors)
+  std::uint64_t odometry_received = 0;
+  std::uint64_t odometry_unmatched = 0;  ///< odometry in no set (50 Hz odometry vs the frame rate: expected)
+  std::size_t scan_matches = 0;          ///< map updates whose scan match was accepted
+  std::size_t scan_match_rejected = 0;   ///< ... not accepted: correction kept
+  double scan_match_time_s = 0.0;        ///< wall time in the correction [s]
+  std::size_t loop_closures = 0;         ///< closures that moved the map frame
+  std::size_t decisions_requested = 0;   ///< kBackground: decision tasks started
+};
+
+/// Wall-clock timing of the loop (meaningful when the loop is paced by the wall clock).
+struct RuntimeTiming {
+  double nominal_period_s = 0.05;
+  LatencySummary control_period;   ///< between the starts of consecutive ticks
+  LatencySummary command_latency;  ///< odometry taken -> command sent, within a tick
+  LatencySummary frame_to_map;     ///< frames' stamp -> their map update done (runtime clock + wall)
+  LatencySummary decision;         ///< a decision asked for -> its goal delivered to the controller
+  std::size_t late_periods = 0;    ///< periods longer than 1.1 x nominal
+  std::size_t missed_periods = 0;  ///< periods longer than 2 x nominal (a deadline missed by more than one period)
+};
+
+class ExplorationRuntime {
+ public:
+  /// `chassis` and `sensors` (one per profile sensor, in the profile's order) must outlive the
+  /// runtime. Throws duet::Error(kInvalidArgument) for a sensor count that does not match the
+  /// profile or invalid settings.
+  ExplorationRuntime(const Profile& profile, ChassisInterface& chassis, std::span<RgbdSensorInterface* const> sensors,
+                     const RuntimeSettings& settings = {});
+  ~ExplorationRuntime();
+  ExplorationRuntime(const ExplorationRuntime&) = delete;
+  ExplorationRuntime& operator=(const ExplorationRuntime&) = delete;
+
+  /// One control period at runtime time now_s [s] (non-decreasing). In kBackground it never
+  /// waits for a background task; it rethrows the first error a task raised.
+  void tick(double now_s);
+  /// kBackground: waits for the background tasks and takes their results (for shutdown and
+  /// tests, not for the control thread). kLockstep: nothing to wait for.
+  void drain();
+
+  /// DEBUGGING ONLY: map and plan with this pose instead of the odometry (nullopt: odometry).
+  void override_pose(const std::optional<Pose2>& pose) { pose_override_ = pose; }
+
+  /// The pose estimate: correction() applied to the latest odometry (or the override).
+  [[nodiscard]] const Pose2& pose() const noexcept { return pose_; }
+  /// The correction map <- odometry frame (identity until a match is accepted).
+  [[nodiscard]] const Pose2& correction() const noexcept { return correction_; }
+  /// The estimated drift rate of the odometry's heading [rad/s].
+  [[nodiscard]] float heading_rate() const noexcept { return heading_rate_; }
+  [[nodiscard]] const Twist& last_command() const noexcept { return last_cmd_; }
+  [[nodiscard]] ExplorerState state() const;
+  [[nodiscard]] ExplorationStatus stop_status() const;
+  [[nodiscard]] ExplorerStats explorer_stats() const;
+  /// The latest map's grid (valid until the next tick()).
+  [[nodiscard]] const OccupancyGrid& map_grid() const;
+  [[nodiscard]] const RuntimeStats& stats() const noexcept { return stats_; }
+  [[nodiscard]] RuntimeTiming timing() const;
+  [[nodiscard]] const ApproximateTimeCore& synchronizer() const noexcept { return sync_; }
+  [[nodiscard]] const Profile& profile() const noexcept { return profile_; }
+  [[nodiscard]] const RuntimeSettings& settings() const noexcept { return settings_; }
+
+  // Owned by the background task in kBackground: read only after drain().
+  [[nodiscard]] Mapper& mapper() noexcept { return mapper_; }
+  [[nodiscard]] const Mapper& mapper() const noexcept { return mapper_; }
+  [[nodiscard]] const Explorer& explorer() const noexcept { return explorer_; }
+  /// The loop closer (nullptr when loop closure or the pose correction is off).
+  [[nodiscard]] const LoopCloser* loop_closer() const noexcept { return loop_ ? &*loop_ : nullptr; }
+
+ private:
+  class Link;
+  struct MapInput;
+  struct Result;
+  struct Event;
+  void handle_set(const ApproximateTimeCore::Set& set, double now_s);
+  /// The map update (step 2) on `in`; returns the loop closure's shift if the map frame moved.
+  std::optional<Pose2> map_update(MapInput& in);
+  void submit_map_update(MapInput&& in);
+  void submit_decision(const Pose2& robot, double now_s);
+  void take_results();
+  void apply_events();
+  [[nodiscard]] Pose2 odometry_at(double t, const OdometryMsg& fallback) const;
+
+  Profile profile_;
+  RuntimeSettings settings_;
+  ChassisInterface& chassis_;
+  std::vector<RgbdSensorInterface*> sensors_;
+  // ---- the pipeline (the control thread in kLockstep, the background task in kBackground)
+  Mapper mapper_;
+  Explorer explorer_;            ///< its navigator in the pipeline, its controller on the control thread
+  PoseCorrector corrector_;
+  ObstacleMemory memory_;
+  std::optional<LoopCloser> loop_;
+  LatencyStats frame_to_map_;    ///< kLockstep only (kBackground: the control side's)
+  // ---- the control thread
+  ApproximateTimeCore sync_;
+  std::unordered_map<std::uint64_t, RgbdImage> frames_;     ///< payloads waiting in the synchronizer, by id
+  std::unordered_map<std::uint64_t, OdometryMsg> odometry_;
+  std::uint64_t next_id_ = 0;
+  double next_map_t_ = 0.0;
+  Pose2 pose_;
+  Pose2 odom_pose_;             ///< latest raw wheel odometry
+  static constexpr std::size_t kOdomHistory = 256;  ///< odometry kept for interpolation (5 s at 50 Hz)
+  std::deque<OdometryMsg> odom_history_;
+  Pose2 correction_;
+  float heading_rate_ = 0.0f;
+  Twist odom_twist_;
+  Twist last_cmd_;
+  std::optional<Pose2> pose_override_;
+  RuntimeStats stats_;
+  LatencyStats period_, command_, decision_latency_, control_frame_to_map_;
+  double last_tick_wall_ = -1.0;
+  // ---- kBackground: what the two sides exchange
+  std::unique_ptr<Link> link_;
+  std::shared_ptr<const NavSnapshot> plan_;          ///< control side: the latest published plan
+  std::shared_ptr<const OccupancyGrid> grid_copy_;   ///< control side: the latest map's grid
+  OccupancyGrid empty_grid_;                         ///< map_grid() before the first map update
+  ExplorerStats nav_stats_;                          ///< control side: the navigator's latest counters
+  bool map_in_flight_ = false, decision_in_flight_ = false;
+  double decision_asked_wall_ = 0.0;
+  std::mutex inbox_mutex_;
+  std::vector<Event> inbox_;                         ///< controller -> navigator events
+  std::mutex results_mutex_;
+  std::vector<Result> results_;                      ///< background -> control results
+  std::unique_ptr<BackgroundWorker> worker_;         ///< last: destroyed first (its tasks use the members above)
+};
+
+}  // namespace duet

@@ -1,0 +1,217 @@
+#pragma once
+/// @file sim_explore.hpp
+/// The paper's experiment end to end in the simulator (issue 4): a robot with the profile's
+/// RGB-D sensors set down in a World explores it through the same runtime pieces a real robot
+/// uses - sensor frames and wheel odometry, the approximate-time synchronizer, the mapper on
+/// the mapping kernels, the explorer and the controller on the exploration kernels - on a
+/// clock that is simulated (lockstep, default) or the wall clock (realtime).
+///
+/// The simulator implements the robot interfaces of robot_io.hpp (SimChassis is the
+/// ChassisInterface, SimRgbdSensor the RgbdSensorInterface) and drives the same
+/// ExplorationRuntime a real robot runs. One loop iteration per control period (20 Hz):
+///  1. the chassis advances one period (physics at 5 ms, odometry messages at 50 Hz);
+///  2. the sensors render when their period is due (sensor_rate_hz; default: the map rate,
+///     i.e. only the frames the pipeline consumes), stamped with the render time, posed by the
+///     TRUE robot pose (the world does not know about odometry drift);
+///  3. ExplorationRuntime::tick(): synchronizer -> mapper (1 Hz) -> explorer -> command; the
+///     pose is the noisy wheel odometry corrected by scan-to-map matching (pose_correction;
+///     enabled = false: the raw odometry) - the true pose only with use_true_pose (a debugging
+///     option, never the default);
+///  4. the run is scored: coverage, time-area curve, collisions, target region.
+/// Frames: the odometry starts at the world's start pose, so the map frame is the world frame
+/// up to the pose estimate's drift; coverage is measured by looking up the world's reachable free cells
+/// in the map.
+///
+/// Determinism: the same world, profile and seed give the same trajectory, map and summary
+/// (except wall times) for any number of threads, in lockstep mode.
+/// Thread safety: one SimExplore per thread of calls; it runs TBB-parallel kernels in the
+/// caller's task arena.
+#include <duet/kernels/grid.hpp>
+#include <duet/runtime/robot/exploration_runtime.hpp>
+#include <duet/runtime/navigation/explorer.hpp>
+#include <duet/runtime/mapping/mapper.hpp>
+#include <duet/runtime/config/profile.hpp>
+#include <duet/sim/chassis.hpp>
+#include <duet/sim/renderer.hpp>
+#include <duet/sim/world.hpp>
+#include <duet/runtime/robot/clock.hpp>
+#include <duet/runtime/robot/synchronizer.hpp>
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace duet::sim {
+
+struct ExploreSettings {
+  std::uint64_t seed = 1;          ///< seeds the chassis noise, the sensor noise and Procedure 1
+  double max_time_s = 900.0;       ///< stop after this much simulated time [s], (0, 1e6]
+  /// Sensor render rate [Hz]; 0 = the map rate (render only what the pipeline consumes, the
+  /// default); the profile's rate (30 Hz) renders every frame a Kinect would give. [0, 1000]
+  double sensor_rate_hz = 0.0;
+  bool realtime = false;           ///< pace the loop by the wall clock (`--realtime`)
+  bool use_true_pose = false;      ///< DEBUGGING ONLY: map and plan with the true pose
+  double curve_period_s = 1.0;     ///< time-area curve sampling [s], (0, 60]
+  float coverage_resolution_m = 0.05f;  ///< ground-truth raster for coverage [m], (0, 1]
+  RenderSettings render;
+  /// Chassis simulation: from the profile's chassis (limits, odometry rate) with the gyro
+  /// heading of a Kobuki when unset; its seed is replaced by a value derived from `seed`.
+  std::optional<ChassisSimSettings> chassis;
+  /// The robot's runtime: rates, execution (lockstep: deterministic; background: as on a
+  /// robot), explorer, synchronizer, pose correction, loop closure. Its sensor_rate_hz is
+  /// replaced by the render rate above.
+  RuntimeSettings runtime;
+};
+void validate(const ExploreSettings& s);
+
+struct CurvePoint {
+  double t_s = 0.0;          ///< simulated time [s]
+  double area_m2 = 0.0;      ///< explored area: known (free or occupied) cells of the grid [m^2]
+  double coverage = 0.0;     ///< fraction of the world's reachable free area known as free, [0, 1]
+};
+
+/// Why the run stopped.
+enum class StopReason {
+  kRunning,
+  kExplorerDone,   ///< the explorer found nothing left to explore (see explorer_status)
+  kTimeLimit,      ///< max_time_s reached
+};
+[[nodiscard]] const char* to_string(StopReason r);
+
+struct ExploreSummary {
+  std::string world, profile;
+  std::uint64_t seed = 0;
+  StopReason stop_reason = StopReason::kRunning;
+  std::string explorer_status;           ///< the explorer's last decision status (when done)
+  double sim_time_s = 0.0;
+  double wall_time_s = 0.0;
+  double explored_area_m2 = 0.0;
+  double reachable_free_area_m2 = 0.0;   ///< the denominator of coverage
+  double coverage = 0.0;
+  double t90_s = -1.0;                   ///< first time coverage >= 90 % (-1: never)
+  double t_paper_area_s = -1.0;          ///< first time area >= 31.0 m^2 (paper: 196 s dual) (-1: never)
+  double target_entered_s = -1.0;        ///< first time the true pose entered the target region (-1: never / none)
+  double path_length_m = 0.0;            ///< true path length
+  std::size_t collisions = 0;
+  ExplorerStats explorer;
+  std::size_t frames_rendered = 0;
+  std::size_t sets_integrated = 0;       ///< synchronized sets the mapper integrated
+  std::size_t sets_not_integrated = 0;   ///< sets between map times (no consumer yet)
+  std::uint64_t frame_drops = 0;         ///< sensor frames the synchronizer dropped (all sensors)
+  std::uint64_t odometry_unmatched = 0;  ///< odometry messages in no set (expected: 50 Hz vs the sensor rate)
+  double odometry_error_m = 0.0;         ///< |raw wheel odometry - truth| at the end [m]
+  double pose_error_m = 0.0;             ///< |pose estimate (corrected odometry) - truth| at the end [m]
+  double pose_error_max_m = 0.0;         ///< max over the run of |pose estimate - truth| [m]
+  double heading_error_deg = 0.0;        ///< |pose estimate's heading - truth's| at the end [deg]
+  std::size_t scan_matches = 0;          ///< map updates whose scan match was accepted
+  std::size_t scan_match_rejected = 0;   ///< map updates whose scan match was not (correction kept)
+  double scan_match_time_s = 0.0;        ///< wall time in the scan-to-map correction [s]
+  Execution execution = Execution::kLockstep;  ///< how the runtime ran
+  bool realtime = false;                 ///< the loop was paced by the wall clock
+  RuntimeTiming timing;                  ///< the runtime's control period, latencies (wall clock)
+  std::size_t map_sets_skipped = 0;      ///< background: map updates skipped while the last one ran
+  bool loop_closure = false;             ///< the loop closer ran
+  LoopClosureStats loops;                ///< its counters (all 0 without it)
+};
+
+/// One collision (a contact onset of the chassis).
+struct CollisionRecord {
+  double t_s = 0.0;
+  Pose2 true_pose;     ///< where the robot stopped
+  Twist command;       ///< the command it was following
+};
+
+/// One stamped pose of a trajectory.
+struct StampedPose {
+  double t_s = 0.0;
+  Pose2 pose;
+};
+
+/// A simulated RGB-D sensor on a SimChassis: renders the world from the chassis' true pose
+/// when its period is due (capture()), and publishes the frame through the
+/// RgbdSensorInterface. Frame noise is seeded from (seed, frame index).
+class SimRgbdSensor final : public RgbdSensorInterface {
+ public:
+  /// `renderer` and `chassis` must outlive the sensor; rate_hz in (0, 1000].
+  SimRgbdSensor(const RgbdRenderer& renderer, const SimChassis& chassis, SensorProfile sensor, double rate_hz,
+                std::uint64_t seed);
+  /// Renders a frame stamped now_s if one is due (the first at t = 0). Returns true if it rendered.
+  bool capture(double now_s);
+  [[nodiscard]] std::vector<StampedRgbd> take_frames() override;
+  void recycle(RgbdImage&& image) override;
+  [[nodiscard]] std::size_t frames_rendered() const noexcept { return rendered_; }
+  /// When the next frame is due [s].
+  [[nodiscard]] double next_due_s() const noexcept { return next_t_; }
+
+ private:
+  const RgbdRenderer& renderer_;
+  const SimChassis& chassis_;
+  SensorProfile sensor_;
+  double period_s_;
+  double next_t_ = 0.0;
+  std::uint64_t seed_;
+  std::size_t rendered_ = 0;
+  std::vector<StampedRgbd> out_;
+  std::vector<RgbdImage> spare_;
+};
+
+class SimExplore {
+ public:
+  /// Builds the renderer, the chassis, the mapper and the explorer. Throws duet::Error for an
+  /// invalid world, profile or settings (the message names what is wrong).
+  SimExplore(World world, Profile profile, ExploreSettings settings = {});
+  ~SimExplore();
+  SimExplore(const SimExplore&) = delete;
+  SimExplore& operator=(const SimExplore&) = delete;
+
+  /// One control period. Returns false once the run has stopped (explorer done or time limit).
+  bool step();
+  /// Steps until the run stops; calls `progress` about once per simulated second.
+  void run(const std::function<void(const SimExplore&)>& progress = {});
+
+  [[nodiscard]] double now_s() const noexcept { return t_; }
+  [[nodiscard]] bool running() const noexcept { return reason_ == StopReason::kRunning; }
+  [[nodiscard]] ExploreSummary summary() const;
+  [[nodiscard]] const std::vector<CurvePoint>& curve() const noexcept { return curve_; }
+  [[nodiscard]] const std::vector<StampedPose>& estimated_trajectory() const noexcept { return est_traj_; }
+  [[nodiscard]] const std::vector<StampedPose>& true_trajectory() const noexcept { return true_traj_; }
+  [[nodiscard]] const std::vector<CollisionRecord>& collision_log() const noexcept { return collision_log_; }
+  [[nodiscard]] Mapper& mapper() noexcept { return runtime_->mapper(); }
+  [[nodiscard]] const Explorer& explorer() const noexcept { return runtime_->explorer(); }
+  [[nodiscard]] const ExplorationRuntime& runtime() const noexcept { return *runtime_; }
+  [[nodiscard]] const World& world() const noexcept { return *world_; }
+  [[nodiscard]] const SimChassis& chassis() const noexcept { return chassis_; }
+  /// Current explored area [m^2] and coverage (as in the curve).
+  [[nodiscard]] CurvePoint measure() const;
+
+ private:
+  std::shared_ptr<const World> world_;
+  Profile profile_;
+  ExploreSettings settings_;
+  RgbdRenderer renderer_;
+  SimChassis chassis_;
+  std::vector<std::unique_ptr<SimRgbdSensor>> sensors_;
+  std::unique_ptr<ExplorationRuntime> runtime_;
+  TruthGrid truth_;
+  std::vector<std::uint8_t> reachable_;
+  std::size_t reachable_count_ = 0;
+  SteadyClock wall_;  ///< wall time since construction; paces the loop when realtime
+  double t_ = 0.0;
+  double dt_ = 0.05;
+  double next_curve_t_ = 0.0;
+  StopReason reason_ = StopReason::kRunning;
+  std::vector<CurvePoint> curve_;
+  std::vector<CollisionRecord> collision_log_;
+  std::vector<StampedPose> est_traj_, true_traj_;
+  double path_length_ = 0.0;
+  double pose_error_max_ = 0.0;
+  double target_entered_ = -1.0;
+  double t90_ = -1.0, t_paper_ = -1.0;
+  double wall_elapsed_ = 0.0;
+};
+
+}  // namespace duet::sim

@@ -1,0 +1,267 @@
+/// @file sim_explore.cpp
+/// The simulated exploration run (see sim_explore.hpp).
+#include <duet/kernels/error.hpp>
+#include <duet/kernels/grid_view.hpp>
+#include <duet/sim/sim_explore.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+
+namespace duet::sim {
+namespace {
+
+constexpr double kPaperAreaM2 = 31.0;  // paper §4.2, Fig. 10: dual sensors, 31.0 m^2 in 196 s
+
+std::uint64_t mix(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+
+ChassisSimSettings chassis_settings(const Profile& profile, const ExploreSettings& s) {
+  ChassisSimSettings c = s.chassis ? *s.chassis : ChassisSimSettings::from_profile(profile.chassis);
+  // The Kobuki's odometry takes its heading from the gyro (kobuki_node's default).
+  if (!s.chassis) c.gyro_heading = true;
+  c.seed = mix(s.seed ^ 0xC4A551ull);
+  return c;
+}
+
+Profile seeded(Profile p, std::uint64_t seed) {
+  p.exploration.strategy.simulation.seed = mix(seed ^ 0x5EED5EEDull);
+  return p;
+}
+
+double sensor_rate(const ExploreSettings& s) { return s.sensor_rate_hz > 0.0 ? s.sensor_rate_hz : s.runtime.map_rate_hz; }
+
+/// The runtime's settings, with the sensors' rate the simulator renders at.
+RuntimeSettings runtime_settings(const ExploreSettings& s) {
+  RuntimeSettings r = s.runtime;
+  r.sensor_rate_hz = sensor_rate(s);
+  return r;
+}
+
+}  // namespace
+
+const char* to_string(StopReason r) {
+  switch (r) {
+    case StopReason::kRunning: return "running";
+    case StopReason::kExplorerDone: return "explorer_done";
+    case StopReason::kTimeLimit: return "time_limit";
+  }
+  return "unknown";
+}
+
+void validate(const ExploreSettings& s) {
+  auto bad = [](const std::string& what) { fail(ErrorCode::kInvalidArgument, "ExploreSettings::" + what); };
+  if (!(std::isfinite(s.max_time_s) && s.max_time_s > 0.0 && s.max_time_s <= 1e6))
+    bad("max_time_s must be in (0, 1e6] s, got " + std::to_string(s.max_time_s));
+  if (!(std::isfinite(s.sensor_rate_hz) && s.sensor_rate_hz >= 0.0 && s.sensor_rate_hz <= 1000.0))
+    bad("sensor_rate_hz must be in [0, 1000] Hz (0 = the map rate), got " + std::to_string(s.sensor_rate_hz));
+  if (s.sensor_rate_hz > 0.0 && s.sensor_rate_hz < s.runtime.map_rate_hz)
+    bad("sensor_rate_hz must be 0 or >= map_rate_hz, got " + std::to_string(s.sensor_rate_hz));
+  if (!(std::isfinite(s.curve_period_s) && s.curve_period_s > 0.0 && s.curve_period_s <= 60.0))
+    bad("curve_period_s must be in (0, 60] s, got " + std::to_string(s.curve_period_s));
+  if (!(std::isfinite(s.coverage_resolution_m) && s.coverage_resolution_m > 0.0f && s.coverage_resolution_m <= 1.0f))
+    bad("coverage_resolution_m must be in (0, 1] m, got " + std::to_string(s.coverage_resolution_m));
+  validate(s.render);
+  validate(runtime_settings(s));
+}
+
+SimRgbdSensor::SimRgbdSensor(const RgbdRenderer& renderer, const SimChassis& chassis, SensorProfile sensor, double rate_hz,
+                             std::uint64_t seed)
+    : renderer_(renderer), chassis_(chassis), sensor_(std::move(sensor)), period_s_(0.0), seed_(seed) {
+  if (!(std::isfinite(rate_hz) && rate_hz > 0.0 && rate_hz <= 1000.0))
+    fail(ErrorCode::kInvalidArgument, "SimRgbdSensor '" + sensor_.name + "': rate_hz must be in (0, 1000], got " + std::to_string(rate_hz));
+  period_s_ = 1.0 / rate_hz;
+}
+
+bool SimRgbdSensor::capture(double now_s) {
+  if (now_s + 1e-9 < next_t_) return false;
+  StampedRgbd f;
+  f.stamp_s = now_s;
+  if (!spare_.empty()) {
+    f.image = std::move(spare_.back());
+    spare_.pop_back();
+  }
+  renderer_.render(sensor_, to_isometry(chassis_.true_pose()) * sensor_.T_robot_optical(), mix(seed_ + 0x100000001B3ull * rendered_),
+                   f.image);
+  ++rendered_;
+  out_.push_back(std::move(f));
+  while (next_t_ <= now_s + 1e-9) next_t_ += period_s_;
+  return true;
+}
+
+std::vector<StampedRgbd> SimRgbdSensor::take_frames() {
+  std::vector<StampedRgbd> out;
+  out.swap(out_);
+  return out;
+}
+
+void SimRgbdSensor::recycle(RgbdImage&& image) {
+  if (spare_.size() < 4) spare_.push_back(std::move(image));
+}
+
+SimExplore::SimExplore(World world, Profile profile, ExploreSettings settings)
+    : world_([&] {
+        validate(world, world.source.empty() ? "world" : world.source);
+        return std::make_shared<const World>(std::move(world));
+      }()),
+      profile_(seeded(std::move(profile), settings.seed)),
+      settings_((validate(settings), settings)),
+      renderer_(*world_, settings_.render),
+      chassis_(world_, chassis_settings(profile_, settings_), world_->start, ChassisBody::from_profile(profile_.chassis)) {
+  validate(profile_, profile_.name);
+  std::vector<RgbdSensorInterface*> ifaces;
+  for (std::size_t i = 0; i < profile_.sensors.size(); ++i) {
+    sensors_.push_back(std::make_unique<SimRgbdSensor>(renderer_, chassis_, profile_.sensors[i], sensor_rate(settings_),
+                                                       mix(settings_.seed * 0x9E3779B97F4A7C15ull + i)));
+    ifaces.push_back(sensors_.back().get());
+  }
+  runtime_ = std::make_unique<ExplorationRuntime>(profile_, chassis_, ifaces, runtime_settings(settings_));
+  dt_ = 1.0 / settings_.runtime.control_rate_hz;
+  truth_ = rasterize(*world_, settings_.coverage_resolution_m, 0.0f, 0.6f);
+  float range = 0.0f;
+  for (const auto& s : profile_.sensors) range = std::max(range, s.max_depth_m);
+  reachable_ = reachable_free_mask(truth_, world_->start, profile_.exploration.inflation.robot_radius_m, range);
+  for (const auto m : reachable_) reachable_count_ += m;
+  true_traj_.push_back({0.0, chassis_.true_pose()});
+  est_traj_.push_back({0.0, world_->start});
+}
+
+SimExplore::~SimExplore() = default;
+
+CurvePoint SimExplore::measure() const {
+  CurvePoint p;
+  p.t_s = t_;
+  const OccupancyGrid& g = runtime_->map_grid();
+  const CellThresholds& th = profile_.exploration.cells;
+  std::size_t known = 0;
+  for (const float l : g.logodds())
+    if (classify(l, th) != CellState::kUnknown) ++known;
+  p.area_m2 = static_cast<double>(known) * g.resolution() * g.resolution();
+  std::size_t covered = 0;
+  for (int y = 0; y < truth_.height; ++y)
+    for (int x = 0; x < truth_.width; ++x) {
+      if (!reachable_[static_cast<std::size_t>(y) * truth_.width + x]) continue;
+      const Eigen::Vector2f c = truth_.origin + Eigen::Vector2f((x + 0.5f) * truth_.resolution_m, (y + 0.5f) * truth_.resolution_m);
+      const Eigen::Vector2i cell = g.cell_of(c);
+      if (g.in_bounds(cell.x(), cell.y()) && classify(g.at(cell.x(), cell.y()), th) != CellState::kUnknown) ++covered;
+    }
+  p.coverage = reachable_count_ ? static_cast<double>(covered) / static_cast<double>(reachable_count_) : 0.0;
+  return p;
+}
+
+bool SimExplore::step() {
+  if (reason_ != StopReason::kRunning) return false;
+  // 1-2. The chassis moves one control period (physics inside; odometry at 50 Hz), stopping at
+  // every instant a sensor is due (30 Hz frames fall between 20 Hz control ticks), where the
+  // sensor renders from the true pose of that instant.
+  const double t_end = t_ + dt_;
+  const std::size_t collisions_before = chassis_.collisions();
+  double t_chassis = t_;
+  for (;;) {
+    double next = t_end;
+    for (const auto& s : sensors_) next = std::min(next, s->next_due_s());
+    if (next > t_chassis) {
+      chassis_.advance(next - t_chassis);
+      t_chassis = next;
+    }
+    for (auto& s : sensors_) (void)s->capture(t_chassis);
+    if (t_chassis + 1e-9 >= t_end) break;
+  }
+  t_ = t_end;
+  if (chassis_.collisions() > collisions_before) collision_log_.push_back({t_, chassis_.true_pose(), runtime_->last_command()});
+  // 3. The robot's runtime: synchronizer -> mapper -> explorer -> command.
+  runtime_->override_pose(settings_.use_true_pose ? std::optional<Pose2>(chassis_.true_pose()) : std::nullopt);
+  runtime_->tick(t_);
+
+  // 4. Scoring.
+  const Pose2 truth = chassis_.true_pose();
+  const Pose2 last = true_traj_.back().pose;
+  path_length_ += std::hypot(truth.x - last.x, truth.y - last.y);
+  true_traj_.push_back({t_, truth});
+  est_traj_.push_back({t_, runtime_->pose()});
+  pose_error_max_ = std::max(pose_error_max_, static_cast<double>(std::hypot(runtime_->pose().x - truth.x, runtime_->pose().y - truth.y)));
+  if (target_entered_ < 0.0 && world_->target_region && world_->target_region->contains({truth.x, truth.y}))
+    target_entered_ = t_;
+  if (t_ + 1e-9 >= next_curve_t_) {
+    const CurvePoint p = measure();
+    curve_.push_back(p);
+    if (t90_ < 0.0 && p.coverage >= 0.9) t90_ = t_;
+    if (t_paper_ < 0.0 && p.area_m2 >= kPaperAreaM2) t_paper_ = t_;
+    next_curve_t_ += settings_.curve_period_s;
+  }
+  if (runtime_->state() == ExplorerState::kDone) reason_ = StopReason::kExplorerDone;
+  else if (t_ + 1e-9 >= settings_.max_time_s) reason_ = StopReason::kTimeLimit;
+  if (reason_ != StopReason::kRunning) {
+    runtime_->drain();  // background tasks done: the mapper and the explorer are the caller's to read
+    const CurvePoint p = measure();
+    if (curve_.empty() || curve_.back().t_s < t_) curve_.push_back(p);
+  }
+  if (settings_.realtime) wall_.sleep_until(t_);
+  wall_elapsed_ = wall_.now_s();
+  return reason_ == StopReason::kRunning;
+}
+
+void SimExplore::run(const std::function<void(const SimExplore&)>& progress) {
+  double next_report = 0.0;
+  while (step()) {
+    if (progress && t_ + 1e-9 >= next_report) {
+      progress(*this);
+      next_report += 1.0;
+    }
+  }
+  if (progress) progress(*this);
+}
+
+ExploreSummary SimExplore::summary() const {
+  ExploreSummary s;
+  s.world = world_->name;
+  s.profile = profile_.name;
+  s.seed = settings_.seed;
+  s.stop_reason = reason_;
+  if (runtime_->state() == ExplorerState::kDone) s.explorer_status = duet::to_string(runtime_->stop_status());
+  s.sim_time_s = t_;
+  s.wall_time_s = wall_elapsed_;
+  const CurvePoint p = measure();
+  s.explored_area_m2 = p.area_m2;
+  s.coverage = p.coverage;
+  s.reachable_free_area_m2 = static_cast<double>(reachable_count_) * truth_.resolution_m * truth_.resolution_m;
+  s.t90_s = t90_;
+  s.t_paper_area_s = t_paper_;
+  s.target_entered_s = target_entered_;
+  s.path_length_m = path_length_;
+  s.collisions = chassis_.collisions();
+  s.explorer = runtime_->explorer_stats();
+  for (const auto& sensor : sensors_) s.frames_rendered += sensor->frames_rendered();
+  const RuntimeStats& rs = runtime_->stats();
+  s.sets_integrated = rs.sets_integrated;
+  s.sets_not_integrated = rs.sets_not_integrated;
+  s.frame_drops = rs.frame_drops;
+  s.odometry_unmatched = rs.odometry_unmatched;
+  const Pose2 tp = chassis_.true_pose();
+  s.odometry_error_m = std::hypot(chassis_.odometry_pose().x - tp.x, chassis_.odometry_pose().y - tp.y);
+  const Pose2 est = runtime_->pose();
+  s.pose_error_m = std::hypot(est.x - tp.x, est.y - tp.y);
+  s.pose_error_max_m = pose_error_max_;
+  s.heading_error_deg = std::fabs(std::remainder(est.theta - tp.theta, 2.0 * std::numbers::pi)) * 180.0 / std::numbers::pi;
+  s.scan_matches = rs.scan_matches;
+  s.scan_match_rejected = rs.scan_match_rejected;
+  s.scan_match_time_s = rs.scan_match_time_s;
+  s.execution = settings_.runtime.execution;
+  s.realtime = settings_.realtime;
+  s.timing = runtime_->timing();
+  s.map_sets_skipped = rs.map_sets_skipped;
+  // In the background mode the loop closer belongs to the background task while the run goes on.
+  const bool pipeline_readable = settings_.runtime.execution == Execution::kLockstep || reason_ != StopReason::kRunning;
+  if (const LoopCloser* lc = runtime_->loop_closer(); lc && pipeline_readable) {
+    s.loop_closure = true;
+    s.loops = lc->stats();
+  }
+  return s;
+}
+
+}  // namespace duet::sim

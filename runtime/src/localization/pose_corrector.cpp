@@ -1,0 +1,109 @@
+/// @file pose_corrector.cpp
+/// Scan-to-map correction of the wheel odometry (see pose_corrector.hpp).
+#include <duet/kernels/error.hpp>
+#include <duet/runtime/localization/pose_corrector.hpp>
+
+#include "mapping/cell_key.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+namespace duet {
+
+void validate(const PoseCorrectionSettings& s) {
+  validate(s.match);
+  auto bad = [](const std::string& what) { fail(ErrorCode::kInvalidArgument, "PoseCorrectionSettings::" + what); };
+  if (!(std::isfinite(s.min_height_m) && std::isfinite(s.max_height_m) && s.min_height_m < s.max_height_m))
+    bad("min_height_m < max_height_m (finite) required, got " + std::to_string(s.min_height_m) + ", " + std::to_string(s.max_height_m));
+  if (!(std::isfinite(s.reference_age_s) && s.reference_age_s >= 0.0 && s.reference_age_s <= 3600.0))
+    bad("reference_age_s must be in [0, 3600] s, got " + std::to_string(s.reference_age_s));
+  if (s.pixel_step < 1 || s.pixel_step > 64) bad("pixel_step must be in [1, 64], got " + std::to_string(s.pixel_step));
+  if (s.max_points < 1) bad("max_points must be >= 1");
+  if (!(std::isfinite(s.gain) && s.gain > 0.0f && s.gain <= 1.0f)) bad("gain must be in (0, 1], got " + std::to_string(s.gain));
+  if (!(std::isfinite(s.rate_gain) && s.rate_gain >= 0.0f && s.rate_gain <= 1.0f))
+    bad("rate_gain must be in [0, 1], got " + std::to_string(s.rate_gain));
+  if (!(std::isfinite(s.rate_gain_initial) && s.rate_gain_initial >= s.rate_gain && s.rate_gain_initial <= 1.0f && s.rate_gain_initial > 0.0f))
+    bad("rate_gain_initial must be in [rate_gain, 1] and > 0, got " + std::to_string(s.rate_gain_initial));
+}
+
+PoseCorrector::PoseCorrector(const Profile& profile, const PoseCorrectionSettings& settings) : profile_(profile), settings_(settings) {
+  validate(settings_);
+}
+
+void PoseCorrector::shift(const Pose2& D) {
+  correction_ = compose(D, correction_);
+  have_reference_ = false;  // the reference copy is of the old frame
+  pending_t_ = -1.0;
+}
+
+Pose2 PoseCorrector::update(std::span<const SensorFrame> frames, const Pose2& odom, const OccupancyGrid& grid, double t) {
+  Pose2 prior = compose(correction_, odom);
+  const auto t0 = std::chrono::steady_clock::now();
+  const PoseCorrectionSettings& pc = settings_;
+  constexpr float kTwoPi = 2.0f * std::numbers::pi_v<float>;
+  // Predict: the heading drifts at the estimated rate since the last update.
+  const double dt = last_match_t_ >= 0.0 ? std::max(0.0, t - last_match_t_) : 0.0;
+  last_match_t_ = t;
+  prior.theta = std::remainder(prior.theta + heading_rate_ * static_cast<float>(dt), kTwoPi);
+  // Obstacle points of the frames in the robot frame, one per grid cell (the first in pixel
+  // order), heights relative to the floor of the map frame.
+  BackProjectionSettings bp = profile_.mapping.back_projection;
+  bp.pixel_step = pc.pixel_step;
+  back_project(frames, bp, scan_cloud_);
+  const float floor_z = profile_.mapping.segmentation.floor_z_m;
+  const float res = grid.resolution();
+  scan_keys_.clear();
+  for (std::size_t i = 0; i < scan_cloud_.size(); ++i) {
+    const Eigen::Vector3f& p = scan_cloud_.points[i];
+    const float h = p.z() - floor_z;
+    if (!(h >= pc.min_height_m && h <= pc.max_height_m)) continue;
+    scan_keys_.emplace_back(cell_key(p.x(), p.y(), res), static_cast<std::uint32_t>(i));
+  }
+  std::sort(scan_keys_.begin(), scan_keys_.end());
+  scan_keys_.erase(std::unique(scan_keys_.begin(), scan_keys_.end(), [](const auto& a, const auto& b) { return a.first == b.first; }),
+                   scan_keys_.end());
+  const std::size_t stride = (scan_keys_.size() + pc.max_points - 1) / pc.max_points;
+  scan_points_.clear();
+  for (std::size_t k = 0; k < scan_keys_.size(); k += std::max<std::size_t>(stride, 1)) {
+    const Eigen::Vector3f& p = scan_cloud_.points[scan_keys_[k].second];
+    scan_points_.emplace_back(p.x(), p.y());
+  }
+  Pose2 at = prior;  // not accepted: the predicted drift still applies
+  bool accepted = false;
+  // The reference map (PoseCorrectionSettings::reference_age_s): the copy before the latest.
+  if (pc.reference_age_s <= 0.0) {
+    if (grid.width() > 0 && grid.height() > 0) {
+      occupied_distance(GridView(grid), profile_.exploration.cells, distance_);
+      have_reference_ = true;
+    }
+  } else if (pending_t_ < 0.0 || t - pending_t_ >= pc.reference_age_s) {
+    if (pending_t_ >= 0.0 && pending_grid_.width() > 0 && pending_grid_.height() > 0) {
+      occupied_distance(GridView(pending_grid_), profile_.exploration.cells, distance_);
+      have_reference_ = true;
+    }
+    pending_grid_ = grid;
+    pending_t_ = t;
+  }
+  if (have_reference_ && scan_points_.size() >= pc.match.min_points) {
+    const ScanMatchResult r = scan_match(distance_.clearance(), scan_points_, prior, pc.match);
+    if (r.status == ScanMatchStatus::kMatched) {
+      const float g = pc.gain;
+      const float e_theta = std::remainder(r.pose.theta - prior.theta, kTwoPi);
+      at = Pose2{prior.x + g * (r.pose.x - prior.x), prior.y + g * (r.pose.y - prior.y), std::remainder(prior.theta + g * e_theta, kTwoPi)};
+      if (dt > 0.0 && pc.rate_gain > 0.0f) {
+        const float k = std::max(pc.rate_gain, 1.0f / (1.0f / pc.rate_gain_initial + static_cast<float>(rate_updates_++)));
+        heading_rate_ += k * e_theta / static_cast<float>(dt);
+      }
+      accepted = true;
+    }
+  }
+  correction_ = compose(at, inverse(odom));
+  ++(accepted ? matches_ : rejected_);
+  time_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return at;
+}
+
+}  // namespace duet

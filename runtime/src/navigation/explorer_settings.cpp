@@ -1,0 +1,57 @@
+/// @file explorer_settings.cpp
+/// validate(ExplorerSettings): the ranges written on each field in explorer_settings.hpp.
+#include <duet/kernels/error.hpp>
+#include <duet/runtime/navigation/explorer_settings.hpp>
+
+#include <cmath>
+#include <string>
+
+namespace duet {
+
+void validate(const ExplorerSettings& s) {
+  auto positive = [](float v, const char* name) {
+    if (!(std::isfinite(v) && v > 0.0f))
+      fail(ErrorCode::kInvalidArgument, std::string("ExplorerSettings::") + name + " must be in (0, inf), got " + std::to_string(v));
+  };
+  positive(s.goal_timeout_s, "goal_timeout_s");
+  positive(s.nominal_speed_mps, "nominal_speed_mps");
+  positive(s.stuck_timeout_s, "stuck_timeout_s");
+  positive(s.stall_timeout_s, "stall_timeout_s");
+  if (!(s.contact_radius_m > 0.0f && s.contact_radius_m <= 1.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::contact_radius_m must be in (0, 1] m, got " + std::to_string(s.contact_radius_m));
+  if (!(s.blacklist_ttl_s > 0.0f))  // +inf allowed
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::blacklist_ttl_s must be in (0, inf], got " + std::to_string(s.blacklist_ttl_s));
+  if (!(s.goal_standoff_search_m >= 0.0f && s.goal_standoff_search_m <= 5.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::goal_standoff_search_m must be in [0, 5] m, got " + std::to_string(s.goal_standoff_search_m));
+  if (!(s.boxed_in_area_m2 >= 0.0f && std::isfinite(s.boxed_in_area_m2)))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::boxed_in_area_m2 must be in [0, inf) m^2, got " + std::to_string(s.boxed_in_area_m2));
+  if (!(s.squeeze_min_unknown_m2 >= 0.0f && std::isfinite(s.squeeze_min_unknown_m2)))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::squeeze_min_unknown_m2 must be in [0, inf) m^2, got " + std::to_string(s.squeeze_min_unknown_m2));
+  if (!(s.squeeze_margin_m >= 0.0f && s.squeeze_margin_m <= 1.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::squeeze_margin_m must be in [0, 1] m, got " + std::to_string(s.squeeze_margin_m));
+  if (!(s.view_range_m >= 0.0f && s.view_range_m <= 10.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_range_m must be in [0, 10] m, got " + std::to_string(s.view_range_m));
+  // At most view_range_m; with no view goals (view_range_m = 0) at most view_range_m's own bound.
+  const float view_min_max = s.view_range_m > 0.0f ? s.view_range_m : 10.0f;
+  if (!(s.view_min_range_m >= 0.0f && s.view_min_range_m <= view_min_max))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_min_range_m must be in [0, " + std::to_string(view_min_max) +
+                                          "] m (view_range_m, or 10 with no view goals), got " + std::to_string(s.view_min_range_m));
+  if (s.view_rays < 4 || s.view_rays > 3600)
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_rays must be in [4, 3600], got " + std::to_string(s.view_rays));
+  if (!(s.recent_obstacles_s >= 0.0f && s.recent_obstacles_s <= 3600.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::recent_obstacles_s must be in [0, 3600] s, got " + std::to_string(s.recent_obstacles_s));
+  if (!(s.recent_obstacle_range_m > 0.0f && s.recent_obstacle_range_m <= 10.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::recent_obstacle_range_m must be in (0, 10] m, got " + std::to_string(s.recent_obstacle_range_m));
+  if (s.recent_obstacle_min_scans < 1 || s.recent_obstacle_min_scans > 1000)
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::recent_obstacle_min_scans must be in [1, 1000], got " + std::to_string(s.recent_obstacle_min_scans));
+  if (!(std::isfinite(s.cornered_after_s) && s.cornered_after_s >= 0.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::cornered_after_s must be in [0, inf) s (0 = off), got " + std::to_string(s.cornered_after_s));
+  if (!(s.slow_clearance_m >= 0.0f && s.slow_clearance_m <= 10.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::slow_clearance_m must be in [0, 10] m (0 = off), got " + std::to_string(s.slow_clearance_m));
+  if (!(std::isfinite(s.slow_speed_mps) && s.slow_speed_mps > 0.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::slow_speed_mps must be in (0, inf) m/s, got " + std::to_string(s.slow_speed_mps));
+  if (s.final_retries < 0 || s.final_retries > 1000)
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::final_retries must be in [0, 1000], got " + std::to_string(s.final_retries));
+}
+
+}  // namespace duet

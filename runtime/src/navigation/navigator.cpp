@@ -1,0 +1,522 @@
+/// @file navigator.cpp
+/// Navigator: costmaps, goal life cycle, global path (see navigator.hpp).
+#include <duet/kernels/error.hpp>
+#include <duet/runtime/navigation/navigator.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace duet {
+
+namespace {
+/// Calls fn(log-odds) for every cell of `g` whose centre is within r of p.
+template <class F>
+void for_each_cell_in_disc(OccupancyGrid& g, const Eigen::Vector2f& p, float r, F&& fn) {
+  const int rc = static_cast<int>(std::ceil(r / g.resolution()));
+  const Eigen::Vector2i c = g.cell_of(p);
+  for (int dy = -rc; dy <= rc; ++dy)
+    for (int dx = -rc; dx <= rc; ++dx) {
+      const int x = c.x() + dx, y = c.y() + dy;
+      if (!g.in_bounds(x, y) || (g.cell_center(x, y) - p).norm() > r) continue;
+      fn(g.logodds()[g.index(x, y)]);
+    }
+}
+
+bool same_geometry(const GridView& a, const GridView& b) {
+  return a.width == b.width && a.height == b.height && a.resolution_m == b.resolution_m &&
+         a.origin.x() == b.origin.x() && a.origin.y() == b.origin.y();
+}
+}  // namespace
+
+NavPlanView NavSnapshot::view() const {
+  NavPlanView v;
+  v.state = state;
+  v.have_map = have_map;
+  v.wait_for_map = wait_for_map;
+  v.goal_id = goal_id;
+  v.goal = goal ? &*goal : nullptr;
+  v.path = path;
+  v.deadline_s = deadline_s;
+  v.dwa = dwa;
+  v.local = &local;
+  v.planning = &planning;
+  return v;
+}
+
+Navigator::Navigator(const Profile& profile, const ExplorerSettings& settings)
+    : profile_(profile), settings_(settings), sectors_(observation_sectors(profile)), model_(profile.exploration.observation) {
+  validate(settings_);
+  validate(profile_.exploration.strategy);
+  validate(profile_.exploration.dwa);
+  validate(profile_.exploration.path);
+  validate(profile_.exploration.inflation);
+}
+
+NavPlanView Navigator::view() const {
+  NavPlanView v;
+  v.state = state_;
+  v.have_map = have_map_;
+  v.wait_for_map = wait_for_map_;
+  v.goal_id = goal_id_;
+  v.goal = goal_ ? &*goal_ : nullptr;
+  v.path = path_;
+  v.deadline_s = goal_deadline_s_;
+  v.dwa = dwa_settings();
+  v.local = &local_;
+  v.planning = &planning_grid();
+  return v;
+}
+
+NavSnapshot Navigator::snapshot() const {
+  NavSnapshot s;
+  s.state = state_;
+  s.stop_status = stop_status_;
+  s.have_map = have_map_;
+  s.wait_for_map = wait_for_map_;
+  s.goal_id = goal_id_;
+  s.goal = goal_;
+  s.path = path_;
+  s.deadline_s = goal_deadline_s_;
+  s.dwa = dwa_settings();
+  s.local = local_;
+  s.planning = planning_grid();
+  return s;
+}
+
+void Navigator::add_trail(const Eigen::Vector2f& here) {
+  if (here.allFinite() && (trail_.empty() || (trail_.back() - here).norm() >= 0.05f)) trail_.push_back(here);
+}
+
+void Navigator::stall(const Eigen::Vector2f& contact, double now_s) {
+  contacts_.push_back(contact);
+  ++stats_.stalls;
+  if (goal_) abandon_goal(stats_.goals_abandoned_stuck, now_s);
+  wait_for_map_ = true;  // decide again once the grids hold the contact
+}
+
+void Navigator::goal_reached(std::uint64_t goal_id, double now_s) {
+  if (!goal_ || goal_id != goal_id_) return;
+  ++stats_.goals_reached;
+  // A frontier that is still a frontier after the robot stood at it and looked at it cannot
+  // be observed from there (the inside of an obstacle behind a gap in its outline): never again.
+  // For a goal on an approach cell the frontier cell it was for is the one looked at.
+  if (view_active_) {
+    viewed_.add(view_target_, now_s, std::numeric_limits<double>::infinity());
+    ++stats_.view_goals_reached;
+  } else if (decision_.status == ExplorationStatus::kFrontierGoal) {
+    blacklist_.add(goal_target_, now_s, std::numeric_limits<double>::infinity());
+    if (decision_.frontier.target_xy != goal_target_)
+      blacklist_.add(decision_.frontier.target_xy, now_s, std::numeric_limits<double>::infinity());
+  }
+  drop_goal();
+}
+
+void Navigator::abandon(std::uint64_t goal_id, AbandonReason why, double now_s) {
+  if (!goal_ || goal_id != goal_id_) return;
+  abandon_goal(why == AbandonReason::kTimeout ? stats_.goals_abandoned_timeout : stats_.goals_abandoned_stuck, now_s);
+}
+
+void Navigator::mark_contacts(OccupancyGrid& g) const {
+  const float occ = std::max(profile_.exploration.cells.occupied_logodds, profile_.mapping.grid_update.max_logodds);
+  for (const Eigen::Vector2f& p : contacts_) for_each_cell_in_disc(g, p, settings_.contact_radius_m, [&](float& l) { l = occ; });
+}
+
+void Navigator::set_recent_obstacles(std::span<const Eigen::Vector2f> points) {
+  recent_.clear();
+  for (const Eigen::Vector2f& p : points)
+    if (p.allFinite()) recent_.push_back(p);
+}
+
+void Navigator::mark_recent(OccupancyGrid& g) {
+  const float occ = std::max(profile_.exploration.cells.occupied_logodds, profile_.mapping.grid_update.max_logodds);
+  const float occupied = profile_.exploration.cells.occupied_logodds;
+  // Decided on the map as given (before any cell is marked here): a cell within one cell of an
+  // obstacle of the map adds nothing the inflation's margin (a cell) does not already hold, and
+  // marking it would only thicken walls by the sensors' noise.
+  recent_cells_.clear();
+  for (const Eigen::Vector2f& p : recent_) {
+    const Eigen::Vector2i c = g.cell_of(p);
+    if (!g.in_bounds(c.x(), c.y())) continue;
+    bool near_map_obstacle = false;
+    for (int dy = -1; dy <= 1 && !near_map_obstacle; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int x = c.x() + dx, y = c.y() + dy;
+        if (g.in_bounds(x, y) && g.logodds()[g.index(x, y)] >= occupied) {
+          near_map_obstacle = true;
+          break;
+        }
+      }
+    if (!near_map_obstacle) recent_cells_.push_back(g.index(c.x(), c.y()));
+  }
+  std::sort(recent_cells_.begin(), recent_cells_.end());
+  recent_cells_.erase(std::unique(recent_cells_.begin(), recent_cells_.end()), recent_cells_.end());
+  for (const std::size_t i : recent_cells_) g.logodds()[i] = occ;
+  stats_.recent_obstacle_cells += recent_cells_.size();
+}
+
+
+void Navigator::shift(const Pose2& D) {
+  if (!(std::isfinite(D.x) && std::isfinite(D.y) && std::isfinite(D.theta)))
+    fail(ErrorCode::kInvalidArgument, "Navigator::shift: the shift is not finite");
+  auto move = [&](Eigen::Vector2f& p) { p = transform_point(D, p); };
+  for (auto* v : {&trail_, &contacts_, &recent_, &path_})
+    for (Eigen::Vector2f& p : *v) move(p);
+  move(goal_target_);
+  move(view_target_);
+  if (goal_) goal_ = compose(D, *goal_);
+}
+
+
+void Navigator::update_map(const OccupancyGrid& grid, const Pose2& robot, double now_s) {
+  const GridView view(grid);
+  if (model_geometry_valid_ && same_geometry(model_.grid(), view)) {
+    (void)model_.update_grid(view);
+  } else {
+    model_.set_grid(view);
+    model_geometry_valid_ = true;
+  }
+  // Planning and driving see the contact obstacles too (the observation model keeps the map).
+  const OccupancyGrid* map = &grid;
+  marked_ = !contacts_.empty();
+  if (marked_) {
+    contact_grid_ = grid;
+    mark_contacts(contact_grid_);
+    map = &contact_grid_;
+  }
+  inflate(GridView(*map), profile_.exploration.inflation, inflated_);
+  if (relaxed_active_) build_relaxed();
+  // The dynamic window's grid: unknown is an obstacle, except where the robot's body has been;
+  // the recent obstacles block (ExplorerSettings::recent_obstacles_s) - only here: where the
+  // pose has moved since a place was mapped, the map's copy of a wall and the recent one narrow
+  // a door between them, and planning on both closed Willow's doors (seed 6 stopped at 59 %
+  // with every frontier unreachable).
+  local_grid_ = *map;
+  if (!recent_.empty()) mark_recent(local_grid_);
+  const float free_l = std::min(profile_.exploration.cells.free_logodds, profile_.mapping.grid_update.min_logodds);
+  const float res = local_grid_.resolution();
+  auto clear_disc = [&](const Eigen::Vector2f& p, float r) {
+    for_each_cell_in_disc(local_grid_, p, r, [&](float& l) {
+      if (std::isnan(l)) l = free_l;
+    });
+  };
+  // The body's trail is free; so is the spot the robot was set down on, out to the dynamic
+  // window's footprint plus a cell (a robot is placed on free floor).
+  // Only cells wholly under the body (centre within radius - half a cell diagonal): an unseen
+  // obstacle corner at the body's edge must stay an obstacle, or the trail creeps into it.
+  const float body_cells_r = profile_.chassis.radius_m - 0.7072f * res;
+  for (const Eigen::Vector2f& p : trail_) clear_disc(p, body_cells_r);
+  if (!trail_.empty())
+    clear_disc(trail_.front(), profile_.exploration.dwa.robot_radius_m + profile_.exploration.dwa.safety_margin_m + res);
+  InflationSettings local_settings = profile_.exploration.inflation;
+  local_settings.unknown_is_obstacle = true;
+  inflate(GridView(local_grid_), local_settings, local_);
+  have_map_ = true;
+  if (state_ == ExplorerState::kIdle) state_ = ExplorerState::kExploring;
+  wait_for_map_ = false;  // a decision that found nothing may try again on the new map
+  if (goal_) {
+    // The goal cell became an obstacle (or its inflation, or the margin of unknown cells) and no
+    // cell near it will do: abandon; else re-plan on the new map.
+    if (!recheck_goal()) {
+      abandon_goal(stats_.goals_abandoned_blocked, now_s);
+    } else if (plan(robot)) {
+      ++stats_.replans;
+    } else {
+      abandon_goal(stats_.goals_abandoned_no_path, now_s);
+    }
+  }
+}
+
+void Navigator::build_relaxed() {
+  InflationSettings relaxed = profile_.exploration.inflation;
+  if (relaxed_boxed_in_) relaxed.uncertain_is_obstacle = false;
+  relaxed.robot_radius_m = relaxed_radius();
+  // The latest map (the model holds its log-odds), with the contacts if any.
+  inflate(marked_ ? GridView(contact_grid_) : model_.grid(), relaxed, relaxed_);
+}
+
+bool Navigator::try_relaxed(const Pose2& robot, double now_s) {
+  if (!have_map_ || !decision_.frontier_searched) return false;
+  if (decision_.status != ExplorationStatus::kAllUnreachable && decision_.status != ExplorationStatus::kRobotBlocked &&
+      decision_.status != ExplorationStatus::kAllBlacklisted)
+    return false;
+  // Boxed in: the search reached a small area from the robot (none if it is blocked).
+  const double cell_m2 = static_cast<double>(inflated_.resolution_m) * static_cast<double>(inflated_.resolution_m);
+  const bool boxed_in = static_cast<double>(decision_.frontier.reached_cells) * cell_m2 < static_cast<double>(settings_.boxed_in_area_m2);
+  const ExplorationSettings& s = profile_.exploration.strategy;
+  FrontierResult f;
+  bool found = false;
+  // First the squeezed radius alone, then (boxed in) with uncertain cells not blocking as well.
+  for (const bool level_boxed : {false, true}) {
+    if (level_boxed ? !boxed_in : !(settings_.squeeze_anywhere || boxed_in)) continue;
+    if (!level_boxed && !(relaxed_radius() < profile_.exploration.inflation.robot_radius_m)) continue;  // same grid
+    relaxed_boxed_in_ = level_boxed;
+    build_relaxed();
+    // From a large area only frontiers of large unknown regions (a room behind a door), not
+    // the pockets between furniture and clutter the robot would squeeze into.
+    FrontierSettings fs = s.frontier;
+    if (!boxed_in) fs.min_unknown_region_m2 = std::max(fs.min_unknown_region_m2, settings_.squeeze_min_unknown_m2);
+    f = find_frontier(relaxed_, Eigen::Vector2f(robot.x, robot.y), blacklist_, now_s, fs, ws_.frontier);
+    if (f.status == FrontierStatus::kFound) {
+      found = true;
+      break;
+    }
+  }
+  if (!found) return false;
+  decision_.status = ExplorationStatus::kFrontierGoal;
+  decision_.goal = frontier_goal_pose(f, robot);
+  decision_.frontier = std::move(f);
+  decision_.frontier_searched = true;
+  relaxed_active_ = true;
+  ++stats_.relaxed_goals;
+  stats_.boxed_in_goals += relaxed_boxed_in_;
+  return true;
+}
+
+std::optional<Pose2> Navigator::find_view(const Pose2& robot, double now_s) {
+  // A fresh search on the planning grid: the relaxed one (if it ran) left its own distances.
+  const FrontierSettings& fs = profile_.exploration.strategy.frontier;
+  const FrontierResult f = find_frontier(inflated_, Eigen::Vector2f(robot.x, robot.y), blacklist_, now_s, fs, view_ws_);
+  if (f.status != FrontierStatus::kAllUnreachable && f.status != FrontierStatus::kAllBlacklisted &&
+      f.status != FrontierStatus::kFound)
+    return std::nullopt;  // no frontier, or the robot blocked: the search's distances were not computed
+  const InflatedGrid& g = inflated_;
+  const GridView geometry = model_.grid();  // the latest map: the geometry of inflated_
+  const std::vector<std::uint8_t>& mask = view_ws_.mask;
+  const std::vector<float>& dist = view_ws_.dist;
+  const float rmin = settings_.view_min_range_m, rmax = settings_.view_range_m;
+  std::vector<Eigen::Vector2f> dirs(static_cast<std::size_t>(settings_.view_rays));
+  for (std::size_t r = 0; r < dirs.size(); ++r) {
+    const float a = 2.0f * std::numbers::pi_v<float> * static_cast<float>(r) / static_cast<float>(dirs.size());
+    dirs[r] = Eigen::Vector2f(std::cos(a), std::sin(a));
+  }
+  float best_len = std::numeric_limits<float>::infinity();
+  std::size_t best_cell = 0, best_target = 0;
+  const std::size_t n = g.cell_count();
+  for (std::size_t i = 0; i < n && i < mask.size(); ++i) {
+    if (mask[i] != 1) continue;  // frontier cells of kept clusters
+    // A frontier cell the robot can reach is the frontier search's business (too near, or
+    // blacklisted: it was stood at and looked at).
+    if (std::isfinite(dist[i])) continue;
+    const Eigen::Vector2f target = g.cell_center(i);
+    if (blacklist_.blocks(target, fs.blacklist_radius_m, now_s) || viewed_.blocks(target, fs.blacklist_radius_m, now_s)) continue;
+    for (const Eigen::Vector2f& dir : dirs) {
+      // Along the line of sight, through known-free cells only, the first cell the robot can
+      // stand on beyond the minimum range.
+      walk_cells(geometry, target, dir, 0.0f, rmax, [&](int ix, int iy, float t_enter, float) {
+        if (!g.in_bounds(ix, iy)) return false;
+        const std::size_t c = g.index(ix, iy);
+        if (g.state[c] != CellState::kFree) return false;
+        if (t_enter < rmin || !std::isfinite(dist[c]) || dist[c] >= best_len || !can_stand_on(ix, iy)) return true;
+        best_len = dist[c];
+        best_cell = c;
+        best_target = i;
+        return false;
+      });
+    }
+  }
+  if (!std::isfinite(best_len)) return std::nullopt;
+  const Eigen::Vector2f at = g.cell_center(best_cell), target = g.cell_center(best_target);
+  view_target_ = target;
+  return Pose2{at.x(), at.y(), std::atan2(target.y() - at.y(), target.x() - at.x())};
+}
+
+bool Navigator::plan(const Pose2& robot) {
+  const PathResult r = plan_path(planning_grid(), Eigen::Vector2f(robot.x, robot.y), Eigen::Vector2f(goal_->x, goal_->y),
+                                 profile_.exploration.path, path_ws_);
+  if (r.status != PathStatus::kFound) return false;
+  path_ = r.waypoints;
+  if (path_.size() == 1) path_.push_back(path_.front());
+  return true;
+}
+
+float Navigator::relaxed_radius() const {
+  return std::min(profile_.exploration.inflation.robot_radius_m, profile_.chassis.radius_m + settings_.squeeze_margin_m);
+}
+
+DwaSettings Navigator::dwa_settings() const {
+  DwaSettings ds = profile_.exploration.dwa;
+  if (relaxed_active_) ds.robot_radius_m = std::min(ds.robot_radius_m, relaxed_radius());
+  return ds;
+}
+
+float Navigator::dwa_clearance() const {
+  const DwaSettings ds = dwa_settings();
+  return ds.robot_radius_m + ds.safety_margin_m;
+}
+
+
+bool Navigator::can_stand_on(int x, int y) const {
+  const InflatedGrid& g = planning_grid();
+  if (!g.in_bounds(x, y) || !local_.in_bounds(x, y)) return false;
+  return g.traversable[g.index(x, y)] != 0 && local_.clearance_m[local_.index(x, y)] > dwa_clearance();
+}
+
+std::optional<Eigen::Vector2f> Navigator::standoff(const Eigen::Vector2f& target) const {
+  const Eigen::Vector2i c = inflated_.cell_of(target);
+  if (can_stand_on(c.x(), c.y())) return target;
+  // The nearest fitting cell centre by distance to the target (ties: the lower row, then column,
+  // so the result is deterministic).
+  const float r = settings_.goal_standoff_search_m;
+  const int rc = static_cast<int>(std::ceil(r / inflated_.resolution_m));
+  std::optional<Eigen::Vector2f> best;
+  float best_d = std::numeric_limits<float>::infinity();
+  for (int dy = -rc; dy <= rc; ++dy)
+    for (int dx = -rc; dx <= rc; ++dx) {
+      const int x = c.x() + dx, y = c.y() + dy;
+      if (!can_stand_on(x, y)) continue;
+      const Eigen::Vector2f p = inflated_.cell_center(inflated_.index(x, y));
+      const float d = (p - target).norm();
+      if (d <= r && d < best_d) {
+        best_d = d;
+        best = p;
+      }
+    }
+  return best;
+}
+
+bool Navigator::recheck_goal() {
+  const Eigen::Vector2i c = inflated_.cell_of(Eigen::Vector2f(goal_->x, goal_->y));
+  if (can_stand_on(c.x(), c.y())) return true;  // still fits
+  const auto p = standoff(goal_target_);
+  if (!p) return false;
+  goal_->x = p->x();
+  goal_->y = p->y();
+  ++stats_.goals_moved;
+  return true;
+}
+
+void Navigator::abandon_goal(int& counter, double now_s) {
+  ++counter;
+  // A view goal's frontier cell is not looked for again (the robot could not get to where it is
+  // seen from); any other goal is blacklisted for a while.
+  if (goal_ && view_active_) viewed_.add(view_target_, now_s, std::numeric_limits<double>::infinity());
+  else if (goal_) blacklist_.add(goal_target_, now_s, settings_.blacklist_ttl_s);
+  drop_goal();
+}
+
+void Navigator::drop_goal() {
+  goal_.reset();
+  relaxed_active_ = false;
+  view_active_ = false;
+  path_.clear();
+}
+
+void Navigator::decide(const Pose2& robot, double now_s) {
+  if (goal_ || wait_for_map_ || !have_map_ || state_ == ExplorerState::kDone) return;
+  const auto start = std::chrono::steady_clock::now();
+  struct Timer {  // records the whole decision's wall time on every return
+    LatencyStats& out;
+    std::chrono::steady_clock::time_point t0;
+    ~Timer() { out.add(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()); }
+  } timer{decide_latency_, start};
+  blacklist_.expire(now_s);
+  // Up to three attempts in one period: a goal without a path is blacklisted and the next one taken.
+  for (int attempt = 0; attempt < 3 && !goal_; ++attempt) {
+    ExplorationSettings s = profile_.exploration.strategy;
+    // A distinct random stream per decision, derived from the profile's seed (Procedure 1).
+    s.simulation.seed = profile_.exploration.strategy.simulation.seed * 0x9E3779B97F4A7C15ull + decision_seed_++;
+    const auto t0 = std::chrono::steady_clock::now();
+    decision_ = decide_goal(model_, inflated_, robot, sectors_, blacklist_, now_s, s, ws_);
+    if (settings_.stop_when_no_frontier && decision_.status == ExplorationStatus::kSimulatedGoal) {
+      // The search ran concurrently with the simulation (concurrent_frontier_search); else run it.
+      if (!decision_.frontier_searched) {
+        decision_.frontier = find_frontier(inflated_, Eigen::Vector2f(robot.x, robot.y), blacklist_, now_s, s.frontier, ws_.frontier);
+        decision_.frontier_searched = true;
+      }
+      if (decision_.frontier.status == FrontierStatus::kNoFrontier) decision_.status = ExplorationStatus::kNoFrontier;
+      else if (decision_.frontier.status == FrontierStatus::kAllUnreachable) decision_.status = ExplorationStatus::kAllUnreachable;
+      else if (decision_.frontier.status == FrontierStatus::kAllBlacklisted) decision_.status = ExplorationStatus::kAllBlacklisted;
+    }
+    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ++stats_.decisions;
+    stats_.decision_time_sum_s += dt;
+    stats_.decision_time_max_s = std::max(stats_.decision_time_max_s, dt);
+    DecisionRecord rec;
+    rec.t_s = now_s;
+    rec.status = decision_.status;
+    rec.reward_bits = decision_.reward_bits;
+    rec.robot = robot;
+    rec.goal = decision_.goal;
+    rec.wall_time_s = dt;
+    rec.frontier_cells = decision_.frontier.frontier_cells;
+    rec.reached_cells = decision_.frontier.reached_cells;
+    float best = std::numeric_limits<float>::infinity();
+    for (const auto& c : decision_.frontier.clusters)
+      if (c.reachable) {
+        ++rec.reachable_clusters;
+        if (c.path_length_m < best) {
+          best = c.path_length_m;
+          rec.nearest_frontier = c.nearest_xy;
+        }
+      }
+    log_.push_back(rec);
+    if (!decision_.frontier.clusters.empty() || decision_.frontier.status != FrontierStatus::kNoFrontier) {
+      frontier_xy_.clear();
+      const auto& fw = ws_.frontier;
+      for (const std::uint32_t i : fw.frontier)
+        if (i < inflated_.cell_count() && i < fw.mask.size() && fw.mask[i]) frontier_xy_.push_back(inflated_.cell_center(static_cast<std::size_t>(i)));
+    }
+    if (decision_.status == ExplorationStatus::kAllBlacklisted) {
+      // Goals abandoned for a while (time limit, no path, an obstacle where the frontier was)
+      // must not end the exploration: forget them and decide again. Only frontiers the robot
+      // stood at and looked at (blacklisted for good) may end it.
+      GoalBlacklist keep;
+      for (const auto& e : blacklist_.entries())
+        if (std::isinf(e.expiry_s)) keep.add(e.xy, now_s, std::numeric_limits<double>::infinity());
+      if (keep.size() < blacklist_.size()) {
+        blacklist_ = keep;
+        continue;
+      }
+    }
+    relaxed_active_ = false;
+    view_active_ = false;
+    if (!decision_.has_goal() && try_relaxed(robot, now_s)) {
+      log_.back().status = decision_.status;
+      log_.back().relaxed = true;
+    }
+    std::optional<Pose2> view;
+    if (!decision_.has_goal() && settings_.view_range_m > 0.0f &&
+        (decision_.status == ExplorationStatus::kAllUnreachable || decision_.status == ExplorationStatus::kAllBlacklisted))
+      view = find_view(robot, now_s);
+    if (!decision_.has_goal() && !view) {
+      if (++no_goal_decisions_ > settings_.final_retries) {
+        state_ = ExplorerState::kDone;
+        stop_status_ = decision_.status;
+      }
+      wait_for_map_ = true;
+      return;
+    }
+    if (view) {
+      view_active_ = true;
+      log_.back().view = true;
+      log_.back().view_target = view_target_;
+      goal_ = *view;
+    } else {
+      goal_ = decision_.goal;
+    }
+    goal_target_ = Eigen::Vector2f(goal_->x, goal_->y);
+    if (!recheck_goal()) {
+      abandon_goal(stats_.goals_abandoned_no_path, now_s);
+      continue;
+    }
+    log_.back().goal = *goal_;
+    if (!plan(robot)) {
+      abandon_goal(stats_.goals_abandoned_no_path, now_s);
+      continue;
+    }
+    log_.back().planned = true;
+    if (view_active_) ++stats_.view_goals;
+    else if (decision_.status == ExplorationStatus::kSimulatedGoal) ++stats_.simulated_goals;
+    else ++stats_.frontier_goals;
+    no_goal_decisions_ = 0;
+    float length = 0.0f;
+    for (std::size_t i = 1; i < path_.size(); ++i) length += (path_[i] - path_[i - 1]).norm();
+    goal_deadline_s_ = now_s + settings_.goal_timeout_s + length / settings_.nominal_speed_mps;
+    ++goal_id_;  // the controller starts afresh on a new goal
+  }
+}
+
+}  // namespace duet

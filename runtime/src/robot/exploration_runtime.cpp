@@ -1,0 +1,440 @@
+/// @file exploration_runtime.cpp
+/// The exploration loop on the robot interfaces (see exploration_runtime.hpp).
+#include <duet/kernels/error.hpp>
+#include <duet/runtime/robot/background_worker.hpp>
+#include <duet/runtime/robot/exploration_runtime.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <thread>
+
+namespace duet {
+namespace {
+
+ApproximateTimeSettings sync_settings(const Profile& profile, const RuntimeSettings& s) {
+  ApproximateTimeSettings a = s.sync;
+  const double odom_rate = profile.chassis.odometry_rate_hz;
+  // Odometry runs at 50 Hz against frames at sensor_rate_hz: hold at least two frame periods of
+  // it so that overflow never takes the message a set needs.
+  a.queue_size = std::max<std::size_t>(a.queue_size, static_cast<std::size_t>(std::ceil(2.0 * odom_rate / s.sensor_rate_hz)) + 2);
+  // True lower bounds on the stamp intervals let sets be emitted at once.
+  a.inter_message_lower_bounds_s.assign(profile.sensors.size(), 0.9 / s.sensor_rate_hz);
+  a.inter_message_lower_bounds_s.push_back(0.9 / odom_rate);
+  return a;
+}
+
+double wall_s() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+
+}  // namespace
+
+const char* to_string(Execution e) { return e == Execution::kBackground ? "background" : "lockstep"; }
+
+void validate(const RuntimeSettings& s) {
+  auto bad = [](const std::string& what) { fail(ErrorCode::kInvalidArgument, "RuntimeSettings::" + what); };
+  if (!(std::isfinite(s.control_rate_hz) && s.control_rate_hz > 0.0 && s.control_rate_hz <= 1000.0))
+    bad("control_rate_hz must be in (0, 1000] Hz, got " + std::to_string(s.control_rate_hz));
+  if (!(std::isfinite(s.map_rate_hz) && s.map_rate_hz > 0.0 && s.map_rate_hz <= s.control_rate_hz))
+    bad("map_rate_hz must be in (0, control_rate_hz] Hz, got " + std::to_string(s.map_rate_hz));
+  if (!(std::isfinite(s.sensor_rate_hz) && s.sensor_rate_hz > 0.0 && s.sensor_rate_hz <= 1000.0))
+    bad("sensor_rate_hz must be in (0, 1000] Hz, got " + std::to_string(s.sensor_rate_hz));
+  if (s.background_threads < 0 || s.background_threads > 256)
+    bad("background_threads must be in [0, 256], got " + std::to_string(s.background_threads));
+  if (!(std::isfinite(s.decision_delay_s) && s.decision_delay_s >= 0.0 && s.decision_delay_s <= 60.0))
+    bad("decision_delay_s must be in [0, 60] s, got " + std::to_string(s.decision_delay_s));
+  validate(s.explorer);
+  validate(s.sync);
+  validate(s.pose_correction);
+  validate(s.loop_closure);
+}
+
+/// One controller -> navigator event (kBackground).
+struct ExplorationRuntime::Event {
+  enum class Kind { kTrail, kStall, kReached, kAbandon } kind = Kind::kTrail;
+  Eigen::Vector2f xy{0.0f, 0.0f};
+  std::uint64_t goal_id = 0;
+  AbandonReason why = AbandonReason::kTimeout;
+  double t_s = 0.0;
+};
+
+/// What a map update needs, taken on the control thread.
+struct ExplorationRuntime::MapInput {
+  std::vector<RgbdImage> images;  ///< one per sensor
+  double t_frames = 0.0;          ///< the frames' mean stamp [s]
+  Pose2 odom_at;                  ///< odometry interpolated to t_frames
+  Pose2 odom_latest;              ///< the latest odometry when the update was asked for
+  double now_s = 0.0;
+  std::optional<Pose2> override_pose;
+};
+
+/// What a background task hands to the control thread.
+struct ExplorationRuntime::Result {
+  bool map = false;                       ///< a map update (else a decision)
+  std::shared_ptr<const NavSnapshot> nav;
+  ExplorerStats nav_stats;
+  std::shared_ptr<const OccupancyGrid> grid;
+  Pose2 correction;
+  float heading_rate = 0.0f;
+  std::optional<Pose2> shift;
+  std::vector<RgbdImage> images;          ///< to recycle on the control thread
+  std::size_t scan_matches = 0, scan_match_rejected = 0, loop_closures = 0;
+  double scan_match_time_s = 0.0;
+  double frame_to_map_s = 0.0;
+  double done_wall_s = 0.0;
+};
+
+/// The controller's link to the navigator in the background (kBackground): events are queued,
+/// a decision is a task, and the plan is the latest published one with the goals the
+/// controller gave up (and, after a stall, the goal) taken out until the navigator has seen it.
+class ExplorationRuntime::Link final : public GoalLink {
+ public:
+  explicit Link(ExplorationRuntime& rt) : rt_(rt) {}
+  NavPlanView plan() override {
+    NavPlanView v = rt_.plan_ ? rt_.plan_->view() : NavPlanView{};
+    if (v.goal && v.goal_id <= dropped_goal_id_) {
+      v.goal = nullptr;
+      v.path = {};
+    }
+    if (stall_pending_) v.wait_for_map = true;
+    return v;
+  }
+  void trail(const Eigen::Vector2f& p) override { post({Event::Kind::kTrail, p, 0, AbandonReason::kTimeout, 0.0}); }
+  void stall(const Eigen::Vector2f& contact, double now_s) override {
+    if (rt_.plan_ && rt_.plan_->goal) dropped_goal_id_ = std::max(dropped_goal_id_, rt_.plan_->goal_id);
+    stall_pending_ = true;
+    post({Event::Kind::kStall, contact, 0, AbandonReason::kStuck, now_s});
+  }
+  void decide(const Pose2& robot, double now_s) override { rt_.submit_decision(robot, now_s); }
+  void goal_reached(std::uint64_t id, double now_s) override {
+    dropped_goal_id_ = std::max(dropped_goal_id_, id);
+    post({Event::Kind::kReached, {}, id, AbandonReason::kTimeout, now_s});
+  }
+  void abandon(std::uint64_t id, AbandonReason why, double now_s) override {
+    dropped_goal_id_ = std::max(dropped_goal_id_, id);
+    post({Event::Kind::kAbandon, {}, id, why, now_s});
+  }
+  /// A map update that started after the stall was posted has been taken: the navigator knows.
+  void map_seen() { stall_pending_ = false; }
+  [[nodiscard]] bool stall_pending() const noexcept { return stall_pending_; }
+
+ private:
+  void post(const Event& e) {
+    std::lock_guard<std::mutex> lock(rt_.inbox_mutex_);
+    rt_.inbox_.push_back(e);
+  }
+  ExplorationRuntime& rt_;
+  std::uint64_t dropped_goal_id_ = 0;
+  bool stall_pending_ = false;
+};
+
+ExplorationRuntime::ExplorationRuntime(const Profile& profile, ChassisInterface& chassis,
+                                       std::span<RgbdSensorInterface* const> sensors, const RuntimeSettings& settings)
+    : profile_(profile),
+      settings_((validate(settings), settings)),
+      chassis_(chassis),
+      sensors_(sensors.begin(), sensors.end()),
+      mapper_(profile.mapping),
+      explorer_(profile, settings.explorer),
+      corrector_(profile, settings.pose_correction),
+      memory_(settings.explorer),
+      sync_(profile.sensors.size() + 1, sync_settings(profile, settings)) {
+  if (sensors_.size() != profile_.sensors.size())
+    fail(ErrorCode::kInvalidArgument, "ExplorationRuntime: " + std::to_string(sensors_.size()) + " sensors for a profile with " +
+                                          std::to_string(profile_.sensors.size()));
+  for (std::size_t i = 0; i < sensors_.size(); ++i)
+    if (sensors_[i] == nullptr) fail(ErrorCode::kInvalidArgument, "ExplorationRuntime: sensor " + std::to_string(i) + " is null");
+  if (settings_.loop_closure.enabled && settings_.pose_correction.enabled)
+    loop_.emplace(settings_.loop_closure, profile_.exploration.cells, mapper_);
+  if (settings_.execution == Execution::kBackground) {
+    link_ = std::make_unique<Link>(*this);
+    worker_ = std::make_unique<BackgroundWorker>(settings_.background_threads);
+  }
+}
+
+ExplorationRuntime::~ExplorationRuntime() { worker_.reset(); }  // before the members its tasks use
+
+ExplorerState ExplorationRuntime::state() const {
+  if (!worker_) return explorer_.state();
+  return plan_ ? plan_->state : ExplorerState::kIdle;
+}
+
+ExplorationStatus ExplorationRuntime::stop_status() const {
+  if (!worker_) return explorer_.stop_status();
+  return plan_ ? plan_->stop_status : ExplorationStatus::kNoFrontier;
+}
+
+ExplorerStats ExplorationRuntime::explorer_stats() const {
+  if (!worker_) return explorer_.stats();
+  return merge_stats(nav_stats_, explorer_.controller().stats());
+}
+
+const OccupancyGrid& ExplorationRuntime::map_grid() const {
+  if (!worker_) return mapper_.grid();
+  return grid_copy_ ? *grid_copy_ : empty_grid_;
+}
+
+RuntimeTiming ExplorationRuntime::timing() const {
+  RuntimeTiming t;
+  t.nominal_period_s = 1.0 / settings_.control_rate_hz;
+  t.control_period = period_.summary();
+  t.command_latency = command_.summary();
+  t.frame_to_map = (worker_ ? control_frame_to_map_ : frame_to_map_).summary();
+  t.decision = worker_ ? decision_latency_.summary() : explorer_.navigator().decide_latency().summary();
+  t.late_periods = period_.count_above(1.1 * t.nominal_period_s);
+  t.missed_periods = period_.count_above(2.0 * t.nominal_period_s);
+  return t;
+}
+
+Pose2 ExplorationRuntime::odometry_at(double t, const OdometryMsg& fallback) const {
+  // The two messages around t in the recent history (stamps increasing); else the fallback.
+  for (std::size_t k = 1; k < odom_history_.size(); ++k) {
+    const OdometryMsg& a = odom_history_[k - 1];
+    const OdometryMsg& b = odom_history_[k];
+    if (!(a.stamp_s <= t && t <= b.stamp_s)) continue;
+    const double span = b.stamp_s - a.stamp_s;
+    const float u = span > 0.0 ? static_cast<float>((t - a.stamp_s) / span) : 0.0f;
+    const float dth = std::remainder(b.pose.theta - a.pose.theta, 2.0f * std::numbers::pi_v<float>);
+    return {a.pose.x + u * (b.pose.x - a.pose.x), a.pose.y + u * (b.pose.y - a.pose.y),
+            std::remainder(a.pose.theta + u * dth, 2.0f * std::numbers::pi_v<float>)};
+  }
+  return fallback.pose;
+}
+
+std::optional<Pose2> ExplorationRuntime::map_update(MapInput& in) {
+  const double w0 = wall_s();
+  const std::size_t n = sensors_.size();
+  std::vector<SensorFrame> frames;
+  frames.reserve(n);
+  for (std::size_t i = 0; i < n; ++i)
+    frames.push_back(frame_view(in.images[i], profile_.sensors[i], profile_.sensors[i].T_robot_optical()));
+  // The pose at the frames' time: the odometry interpolated to their mean stamp, corrected by
+  // scan matching against the map before it integrates them (or, debugging, the override).
+  Pose2 at;
+  Pose2 pose = in.override_pose ? *in.override_pose : compose(corrector_.correction(), in.odom_latest);
+  if (in.override_pose) {
+    at = *in.override_pose;
+  } else {
+    at = compose(corrector_.correction(), in.odom_at);
+    if (settings_.pose_correction.enabled) {
+      at = corrector_.update(frames, in.odom_at, mapper_.grid(), in.t_frames);
+      pose = compose(corrector_.correction(), in.odom_latest);
+    }
+  }
+  mapper_.integrate(frames, to_isometry(at));
+  std::optional<Pose2> shift;
+  if (loop_ && !in.override_pose) {
+    // The map frame moved: so do the correction, the pose, and what the navigator keeps.
+    shift = loop_->update(mapper_, at, in.t_frames);
+    if (shift) {
+      corrector_.shift(*shift);
+      pose = compose(corrector_.correction(), in.odom_latest);
+      at = compose(*shift, at);
+      explorer_.navigator().shift(*shift);
+    }
+  }
+  if (settings_.explorer.recent_obstacles_s > 0.0f)
+    explorer_.set_recent_obstacles(memory_.add(mapper_.last_obstacles(), at, in.odom_at, in.t_frames, mapper_.grid().resolution()));
+  explorer_.update_map(mapper_.grid(), pose, in.now_s);
+  if (!worker_) frame_to_map_.add((in.now_s - in.t_frames) + (wall_s() - w0));
+  return shift;
+}
+
+void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double now_s) {
+  const std::size_t n = sensors_.size();
+  MapInput in;
+  in.images.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    auto it = frames_.find(set.ids[i]);
+    if (it == frames_.end()) fail(ErrorCode::kInternal, "synchronizer returned an unknown frame id");
+    in.images[i] = std::move(it->second);
+    frames_.erase(it);
+  }
+  auto ot = odometry_.find(set.ids[n]);
+  if (ot == odometry_.end()) fail(ErrorCode::kInternal, "synchronizer returned an unknown odometry id");
+  const OdometryMsg odom = ot->second;
+  odometry_.erase(ot);
+  const double stamp = set.stamps_s[n];
+  const bool due = stamp + 1e-9 >= next_map_t_;
+  if (due && worker_ && map_in_flight_) {
+    ++stats_.map_sets_skipped;  // the last update still runs: the next set after it is taken
+  } else if (due) {
+    for (std::size_t i = 0; i < n; ++i) in.t_frames += set.stamps_s[i];
+    in.t_frames /= static_cast<double>(n);
+    in.odom_at = odometry_at(in.t_frames, odom);
+    in.odom_latest = odom_pose_;
+    in.now_s = now_s;
+    in.override_pose = pose_override_;
+    while (next_map_t_ <= stamp + 1e-9) next_map_t_ += 1.0 / settings_.map_rate_hz;
+    if (worker_) {
+      submit_map_update(std::move(in));
+      return;
+    }
+    if (map_update(in)) ++stats_.loop_closures;
+    correction_ = corrector_.correction();
+    heading_rate_ = corrector_.heading_rate();
+    if (!pose_override_) pose_ = compose(correction_, odom_pose_);
+    stats_.scan_matches = corrector_.matches();
+    stats_.scan_match_rejected = corrector_.rejected();
+    stats_.scan_match_time_s = corrector_.time_s();
+    ++stats_.sets_integrated;
+  } else {
+    ++stats_.sets_not_integrated;
+  }
+  for (std::size_t i = 0; i < n; ++i) sensors_[i]->recycle(std::move(in.images[i]));
+}
+
+void ExplorationRuntime::submit_map_update(MapInput&& input) {
+  map_in_flight_ = true;
+  const double submitted = wall_s();
+  worker_->submit([this, in = std::make_shared<MapInput>(std::move(input)), submitted] {
+    apply_events();
+    Result r;
+    r.map = true;
+    r.shift = map_update(*in);
+    r.nav = std::make_shared<const NavSnapshot>(explorer_.navigator().snapshot());
+    r.nav_stats = explorer_.navigator().stats();
+    r.grid = std::make_shared<const OccupancyGrid>(mapper_.grid());
+    r.correction = corrector_.correction();
+    r.heading_rate = corrector_.heading_rate();
+    r.scan_matches = corrector_.matches();
+    r.scan_match_rejected = corrector_.rejected();
+    r.scan_match_time_s = corrector_.time_s();
+    r.images = std::move(in->images);
+    r.done_wall_s = wall_s();
+    r.frame_to_map_s = (in->now_s - in->t_frames) + (r.done_wall_s - submitted);
+    std::lock_guard<std::mutex> lock(results_mutex_);
+    results_.push_back(std::move(r));
+  });
+}
+
+void ExplorationRuntime::apply_events() {
+  std::vector<Event> events;
+  {
+    std::lock_guard<std::mutex> lock(inbox_mutex_);
+    events.swap(inbox_);
+  }
+  Navigator& nav = explorer_.navigator();
+  for (const Event& e : events) {
+    switch (e.kind) {
+      case Event::Kind::kTrail: nav.add_trail(e.xy); break;
+      case Event::Kind::kStall: nav.stall(e.xy, e.t_s); break;
+      case Event::Kind::kReached: nav.goal_reached(e.goal_id, e.t_s); break;
+      case Event::Kind::kAbandon: nav.abandon(e.goal_id, e.why, e.t_s); break;
+    }
+  }
+}
+
+void ExplorationRuntime::submit_decision(const Pose2& robot, double now_s) {
+  if (decision_in_flight_) return;
+  decision_in_flight_ = true;
+  decision_asked_wall_ = wall_s();
+  ++stats_.decisions_requested;
+  worker_->submit([this, robot, now_s] {
+    apply_events();
+    const double w0 = wall_s();
+    explorer_.navigator().decide(robot, now_s);
+    if (settings_.decision_delay_s > 0.0) {
+      const double left = settings_.decision_delay_s - (wall_s() - w0);
+      if (left > 0.0) std::this_thread::sleep_for(std::chrono::duration<double>(left));
+    }
+    Result r;
+    r.nav = std::make_shared<const NavSnapshot>(explorer_.navigator().snapshot());
+    r.nav_stats = explorer_.navigator().stats();
+    r.done_wall_s = wall_s();
+    std::lock_guard<std::mutex> lock(results_mutex_);
+    results_.push_back(std::move(r));
+  });
+}
+
+void ExplorationRuntime::take_results() {
+  worker_->rethrow_if_failed();
+  std::vector<Result> results;
+  {
+    std::unique_lock<std::mutex> lock(results_mutex_, std::try_to_lock);
+    if (!lock.owns_lock()) return;  // the task is handing a result over: take it next period
+    results.swap(results_);
+  }
+  for (Result& r : results) {
+    if (r.map) {
+      map_in_flight_ = false;
+      ++stats_.sets_integrated;
+      correction_ = r.correction;
+      heading_rate_ = r.heading_rate;
+      if (!pose_override_) pose_ = compose(correction_, odom_pose_);
+      if (r.shift) {
+        explorer_.controller().shift(*r.shift);
+        ++stats_.loop_closures;
+      }
+      stats_.scan_matches = r.scan_matches;
+      stats_.scan_match_rejected = r.scan_match_rejected;
+      stats_.scan_match_time_s = r.scan_match_time_s;
+      grid_copy_ = std::move(r.grid);
+      control_frame_to_map_.add(r.frame_to_map_s);
+      link_->map_seen();
+      for (std::size_t i = 0; i < r.images.size() && i < sensors_.size(); ++i) sensors_[i]->recycle(std::move(r.images[i]));
+    } else {
+      decision_in_flight_ = false;
+      if (r.nav && r.nav->goal) decision_latency_.add(r.done_wall_s - decision_asked_wall_);
+    }
+    plan_ = std::move(r.nav);
+    nav_stats_ = r.nav_stats;
+  }
+}
+
+void ExplorationRuntime::drain() {
+  if (!worker_) return;
+  worker_->wait_idle();
+  take_results();
+}
+
+void ExplorationRuntime::tick(double now_s) {
+  const double w0 = wall_s();
+  if (last_tick_wall_ >= 0.0) period_.add(w0 - last_tick_wall_);
+  last_tick_wall_ = w0;
+  if (worker_) take_results();
+  const std::size_t n = sensors_.size();
+  // 1. Odometry (pose at up to the odometry rate) and frames into the synchronizer.
+  for (OdometryMsg& m : chassis_.take_odometry()) {
+    ++stats_.odometry_received;
+    odom_pose_ = m.pose;
+    pose_ = compose(correction_, m.pose);
+    if (odom_history_.empty() || m.stamp_s > odom_history_.back().stamp_s) odom_history_.push_back(m);
+    while (odom_history_.size() > kOdomHistory) odom_history_.pop_front();
+    odom_twist_ = m.twist;
+    const std::uint64_t id = next_id_++;
+    const double stamp = m.stamp_s;
+    odometry_.emplace(id, m);
+    (void)sync_.add(n, stamp, id);  // a refused message comes back in take_drops()
+  }
+  if (pose_override_) pose_ = *pose_override_;
+  for (std::size_t i = 0; i < n; ++i)
+    for (StampedRgbd& f : sensors_[i]->take_frames()) {
+      ++stats_.frames_received;
+      const std::uint64_t id = next_id_++;
+      frames_.emplace(id, std::move(f.image));
+      (void)sync_.add(i, f.stamp_s, id);  // a refused message comes back in take_drops()
+    }
+  // 2. Synchronized sets -> map updates (map rate); drops release their payloads.
+  for (const auto& set : sync_.take_sets()) handle_set(set, now_s);
+  for (const auto& d : sync_.take_drops()) {
+    if (d.stream < n) {
+      ++stats_.frame_drops;
+      auto it = frames_.find(d.id);
+      if (it != frames_.end()) {
+        sensors_[d.stream]->recycle(std::move(it->second));
+        frames_.erase(it);
+      }
+    } else {
+      ++stats_.odometry_unmatched;
+      odometry_.erase(d.id);
+    }
+  }
+  // 3. Control on the pose estimate.
+  last_cmd_ = worker_ ? explorer_.controller().control(pose_, odom_twist_, now_s, *link_) : explorer_.control(pose_, odom_twist_, now_s);
+  chassis_.command(last_cmd_);
+  command_.add(wall_s() - w0);
+}
+
+}  // namespace duet
