@@ -32,4 +32,9 @@ fi
 
 jobs="$(nproc 2>/dev/null || echo 2)"
 cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE="${DUET_BUILD_TYPE:-Release}" "$@" >/dev/null
-cmake --build "$build" -j "$jobs"
+# DUET_BUILD_TARGETS: build only these targets (space-separated; default: all).
+if [ -n "${DUET_BUILD_TARGETS:-}" ]; then
+  for t in $DUET_BUILD_TARGETS; do cmake --build "$build" -j "$jobs" --target "$t"; done
+else
+  cmake --build "$build" -j "$jobs"
+fi

@@ -1,7 +1,11 @@
 #!/usr/bin/env bash
-# Sets everything up (Debian packages, build) and runs the test suite twice:
+# Sets everything up (Debian packages, build) and runs the test suite three times:
 #   1. Release build            (build/),       ctest
 #   2. AddressSanitizer + UBSan (build-asan/),  ctest
+#   3. ThreadSanitizer          (build-tsan/),  the tests of everything that runs threads of its
+#      own: the runtime's background mode and its worker, the clocks. They run their TBB work in
+#      one-thread arenas: Debian's TBB is not instrumented, so TSan cannot see TBB's own
+#      synchronisation (its parallel loops would show as races).
 # Usage: scripts/test.sh            both passes
 #        DUET_SKIP_SANITIZERS=1 scripts/test.sh   only the Release pass
 set -euo pipefail
@@ -18,4 +22,11 @@ if [ "${DUET_SKIP_SANITIZERS:-0}" != 1 ]; then
   export ASAN_OPTIONS="detect_leaks=0:abort_on_error=1:strict_string_checks=1"
   export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
   (cd "$here/build-asan" && ctest --output-on-failure -j "$jobs" --timeout 1800)
+
+  echo "== duet: ThreadSanitizer build and the threaded tests"
+  export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$here/tests/tsan.supp"
+  DUET_BUILD_TYPE=RelWithDebInfo DUET_BUILD_TARGETS=test_runtime \
+    "$here/scripts/setup.sh" "$here/build-tsan" -DDUET_SANITIZE_THREAD=ON -DDUET_BUILD_BENCH=OFF
+  (cd "$here/build-tsan" && ctest --output-on-failure -j "$jobs" --timeout 1800 \
+     -R '^(BackgroundWorker|BackgroundRuntime|Clock)\.')
 fi

@@ -43,7 +43,15 @@ void validate(const FrontierSettings& s) {
   if (!std::isfinite(s.approach_radius_m) || !(s.approach_radius_m >= 0.0f))
     fail(ErrorCode::kInvalidArgument,
          "FrontierSettings.approach_radius_m must be finite and >= 0 [m], got " + std::to_string(s.approach_radius_m));
+  if (!(s.potential_scale >= 0.0f && s.potential_scale <= 1e3f))
+    fail(ErrorCode::kInvalidArgument, "FrontierSettings.potential_scale must be in [0, 1000], got " + std::to_string(s.potential_scale));
+  if (!(s.gain_scale >= 0.0f && s.gain_scale <= 1e3f))
+    fail(ErrorCode::kInvalidArgument, "FrontierSettings.gain_scale must be in [0, 1000], got " + std::to_string(s.gain_scale));
+  if (s.selection != FrontierSelection::kNearest && s.selection != FrontierSelection::kExploreLite)
+    fail(ErrorCode::kInvalidArgument, "FrontierSettings.selection must be kNearest or kExploreLite");
 }
+
+const char* to_string(FrontierSelection s) { return s == FrontierSelection::kExploreLite ? "explore_lite" : "nearest"; }
 
 const char* to_string(FrontierStatus s) {
   switch (s) {
@@ -849,6 +857,7 @@ FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot
                            ? std::numeric_limits<C>::max()
                            : static_cast<C>(std::ceil(min_units));
     ws.cand.assign(res.clusters.size(), 0);
+    ws.cluster_goal.assign(res.clusters.size(), -1);
     goal = -1;
     any_connected_reached = false;
     const auto on_frontier = [&](std::uint32_t c, C d, std::uint8_t f) {
@@ -871,6 +880,7 @@ FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot
       } else {
         ws.cand[k] = 2;
         if (goal < 0) goal = c;
+        if (ws.cluster_goal[k] < 0) ws.cluster_goal[k] = c;  // settled in path order: the cluster's nearest
       }
     };
     if (!dijkstra<C>(g, ws.flags.data(), cost, bo, bd, static_cast<std::uint32_t>(start), on_frontier, res.reached_cells))
@@ -900,6 +910,19 @@ FrontierResult find_frontier(const InflatedGrid& g, const Eigen::Vector2f& robot
   if (goal < 0) {
     res.status = any_connected_reached ? FrontierStatus::kAllBlacklisted : FrontierStatus::kAllUnreachable;
     return res;
+  }
+  if (s.selection == FrontierSelection::kExploreLite) {
+    // explore_lite's cost over the clusters that offer a goal (ties: the lower cluster id).
+    float best = std::numeric_limits<float>::infinity();
+    for (std::size_t k = 0; k < res.clusters.size(); ++k) {
+      if (ws.cluster_goal[k] < 0) continue;
+      const float d = std::sqrt(best_e[k]);
+      const float cost = s.potential_scale * d - s.gain_scale * static_cast<float>(res.clusters[k].cells) * g.resolution_m;
+      if (cost < best) {
+        best = cost;
+        goal = ws.cluster_goal[k];
+      }
+    }
   }
   res.status = FrontierStatus::kFound;
   const auto gl = static_cast<std::size_t>(goal);

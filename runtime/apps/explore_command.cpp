@@ -45,11 +45,15 @@ struct ExploreOptions {
   float slow_speed_mps = -1.0f;
   float gyro_noise = 0.0f;
   bool no_loop_closure = false;
+  std::string on_done = "stay";
+  std::string strategy = "profile";
   bool quiet = false;
 };
 
 struct CompareOptions {
   std::string world = "lab";
+  std::string profiles = "dual,single";
+  std::string strategies = "paper";
   int seeds = 3;
   std::uint64_t first_seed = 1;
   double max_time = 600.0;
@@ -72,6 +76,34 @@ double parse_sensor_rate(const std::string& s) {
   fail(ErrorCode::kInvalidArgument, "--sensor-rate '" + s + "': expected pipeline, full or a rate in (0, 1000] Hz");
 }
 
+/// The goal selection strategies `--strategy` names (the profile's settings otherwise).
+void apply_strategy(Profile& p, const std::string& strategy) {
+  ExplorationSettings& s = p.exploration.strategy;
+  if (strategy == "paper") {  // Fig. 6: partial map simulation, nearest frontier when R_g <= eps_R
+    s.use_simulation = true;
+    s.frontier.selection = FrontierSelection::kNearest;
+  } else if (strategy == "nearest_frontier") {  // Yamauchi 1997
+    s.use_simulation = false;
+    s.frontier.selection = FrontierSelection::kNearest;
+  } else if (strategy == "explore_lite") {  // explore_lite's frontier cost, its default weights
+    s.use_simulation = false;
+    s.frontier.selection = FrontierSelection::kExploreLite;
+  } else if (strategy != "profile") {
+    fail(ErrorCode::kInvalidArgument, "strategy '" + strategy + "': expected paper, nearest_frontier, explore_lite or profile");
+  }
+}
+
+std::vector<std::string> split_list(const std::string& s) {
+  std::vector<std::string> out;
+  std::size_t b = 0;
+  while (b <= s.size()) {
+    const std::size_t e = std::min(s.find(',', b), s.size());
+    if (e > b) out.push_back(s.substr(b, e - b));
+    b = e + 1;
+  }
+  return out;
+}
+
 nlohmann::json to_json(const sim::ExploreSummary& s) {
   nlohmann::json j;
   j["world"] = s.world;
@@ -79,6 +111,8 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
   j["seed"] = s.seed;
   j["stop_reason"] = sim::to_string(s.stop_reason);
   j["explorer_status"] = s.explorer_status;
+  j["stop_detail"] = s.stop_detail;
+  j["explorer_state"] = s.explorer_state;
   j["sim_time_s"] = s.sim_time_s;
   j["wall_time_s"] = s.wall_time_s;
   j["speed_vs_real_time"] = s.wall_time_s > 0.0 ? s.sim_time_s / s.wall_time_s : 0.0;
@@ -289,12 +323,14 @@ int run_explore(const ExploreOptions& o) {
   const double rate = parse_sensor_rate(o.sensor_rate);
   sim::World world = sim::resolve_world(o.world);
   Profile profile = resolve_profile(o.profile);
+  apply_strategy(profile, o.strategy);
   sim::ExploreSettings es = make_settings(profile, o.seed, o.max_time, rate);
   es.realtime = o.realtime;
   if (o.execution == "background" || (o.execution == "auto" && o.realtime)) es.runtime.execution = Execution::kBackground;
   else if (o.execution != "lockstep" && o.execution != "auto")
     fail(ErrorCode::kInvalidArgument, "--execution '" + o.execution + "': expected auto, lockstep or background");
   es.use_true_pose = o.true_pose;
+  es.runtime.explorer.on_done = o.on_done == "return_home" ? OnDone::kReturnHome : OnDone::kStay;
   es.runtime.pose_correction.enabled = !o.raw_odometry;
   es.runtime.loop_closure.enabled = !o.no_loop_closure;
   es.runtime.explorer.recent_obstacles_s = o.recent_obstacles_s;
@@ -330,7 +366,7 @@ int run_explore(const ExploreOptions& o) {
                    "duet explore: stopped (%s%s%s) at %.1f s: %.2f m^2 explored, coverage %.1f %% of %.2f m^2 reachable, "
                    "%zu collisions, path %.1f m; wrote %s/{cloud.pcd, cloud.ply, grid.yaml, grid.pgm, grid.png, "
                    "trajectory.tum, trajectory_true.tum, curve.csv, curve.png, summary.json, log.json}\n",
-                   sim::to_string(s.stop_reason), s.explorer_status.empty() ? "" : ": ", s.explorer_status.c_str(),
+                   sim::to_string(s.stop_reason), s.stop_detail.empty() ? "" : ": ", s.stop_detail.c_str(),
                    s.sim_time_s, s.explored_area_m2, 100.0 * s.coverage, s.reachable_free_area_m2, s.collisions,
                    s.path_length_m, o.out.c_str());
     }
@@ -340,6 +376,12 @@ int run_explore(const ExploreOptions& o) {
 
 int run_compare(const CompareOptions& o) {
   if (o.seeds < 1 || o.seeds > 1000) fail(ErrorCode::kInvalidArgument, "--seeds must be in [1, 1000]");
+  const std::vector<std::string> profiles = split_list(o.profiles), strategies = split_list(o.strategies);
+  if (profiles.empty() || strategies.empty()) fail(ErrorCode::kInvalidArgument, "--profiles and --strategies must name at least one each");
+  for (const auto& st : strategies) {
+    Profile probe = resolve_profile(profiles.front());
+    apply_strategy(probe, st);  // a bad name fails before any run
+  }
   const sim::World world = sim::resolve_world(o.world);
   const std::filesystem::path out(o.out);
   std::filesystem::create_directories(out);
@@ -347,51 +389,67 @@ int run_compare(const CompareOptions& o) {
   const bool tty = stderr_is_tty() && !o.quiet;
   nlohmann::json runs = nlohmann::json::array();
   std::vector<PlotSeries> series;
+  std::vector<std::string> variants;
   std::ofstream csv(out / "compare.csv");
-  csv << "profile,seed,time_s,explored_area_m2,coverage\n";
+  csv << "variant,profile,strategy,seed,time_s,explored_area_m2,coverage\n";
+  static const Rgb8 kColours[] = {{30, 90, 200}, {220, 120, 20}, {40, 160, 60}, {180, 40, 160}, {120, 120, 120}, {200, 40, 40}};
   arena.execute([&] {
-    for (const char* name : {"dual", "single"}) {
-      for (int k = 0; k < o.seeds; ++k) {
-        const std::uint64_t seed = o.first_seed + static_cast<std::uint64_t>(k);
-        Profile profile = resolve_profile(name);
-        sim::ExploreSettings es = make_settings(profile, seed, o.max_time, 0.0);
-        sim::SimExplore run(world, std::move(profile), es);
-        const std::string prefix = std::string(name) + " seed " + std::to_string(seed) + ": ";
-        run.run([&](const sim::SimExplore& r) {
-          if (!o.quiet) print_progress(r, tty, prefix.c_str());
-        });
-        if (tty) std::fputc('\n', stderr);
-        const bool dual = std::string(name) == "dual";
-        series.push_back(curve_series(run.curve(), k == 0 ? name : "", dual ? Rgb8{30, 90, 200} : Rgb8{220, 120, 20}, 2));
-        for (const auto& c : run.curve()) {
-          char buf[160];
-          std::snprintf(buf, sizeof buf, "%s,%llu,%.2f,%.3f,%.4f\n", name, static_cast<unsigned long long>(seed), c.t_s,
-                        c.area_m2, c.coverage);
-          csv << buf;
+    for (const std::string& pname : profiles)
+      for (const std::string& strategy : strategies) {
+        const std::string variant = strategies.size() == 1 ? pname : profiles.size() == 1 ? strategy : pname + "/" + strategy;
+        const Rgb8 colour = kColours[variants.size() % std::size(kColours)];
+        variants.push_back(variant);
+        for (int k = 0; k < o.seeds; ++k) {
+          const std::uint64_t seed = o.first_seed + static_cast<std::uint64_t>(k);
+          Profile profile = resolve_profile(pname);
+          apply_strategy(profile, strategy);
+          sim::ExploreSettings es = make_settings(profile, seed, o.max_time, 0.0);
+          sim::SimExplore run(world, std::move(profile), es);
+          const std::string prefix = variant + " seed " + std::to_string(seed) + ": ";
+          double next_line = 0.0;
+          run.run([&](const sim::SimExplore& r) {
+            if (o.quiet || (!tty && r.running() && r.now_s() + 1e-9 < next_line)) return;
+            print_progress(r, tty, prefix.c_str());
+            next_line = r.now_s() + 10.0;
+          });
+          if (tty) std::fputc('\n', stderr);
+          series.push_back(curve_series(run.curve(), k == 0 ? variant : "", colour, 2));
+          for (const auto& c : run.curve()) {
+            char buf[256];
+            std::snprintf(buf, sizeof buf, "%s,%s,%s,%llu,%.2f,%.3f,%.4f\n", variant.c_str(), pname.c_str(), strategy.c_str(),
+                          static_cast<unsigned long long>(seed), c.t_s, c.area_m2, c.coverage);
+            csv << buf;
+          }
+          nlohmann::json r = to_json(run.summary());
+          r["variant"] = variant;
+          r["strategy"] = strategy;
+          runs.push_back(std::move(r));
         }
-        runs.push_back(to_json(run.summary()));
       }
-    }
   });
   PlotOptions po;
-  po.title = "Time-area curves on " + world.name + ": dual vs single RGB-D (" + std::to_string(o.seeds) + " seeds each)";
+  po.title = "Time-area curves on " + world.name + " (" + std::to_string(o.seeds) + " seeds each)";
   po.x_label = "time [s]";
   po.y_label = "explored area [m^2]";
   po.markers = paper_markers();
   write_plot_png(out / "compare.png", series, po);
-  // Means per profile of the times to the paper's area and to 90 % coverage.
+  // Means per variant (Explore-Bench's measures): coverage, times to the paper's area and to
+  // 90 % coverage (over the runs that reached them), total time, path length, collisions.
   nlohmann::json j;
   j["world"] = world.name;
   j["runs"] = runs;
-  for (const char* name : {"dual", "single"}) {
-    double t31 = 0.0, t90 = 0.0, cov = 0.0;
-    int n31 = 0, n90 = 0, n = 0;
+  for (const std::string& variant : variants) {
+    double t31 = 0.0, t90 = 0.0, cov = 0.0, total = 0.0, path = 0.0;
+    int n31 = 0, n90 = 0, n = 0, self_stopped = 0;
     std::size_t collisions = 0;
     for (const auto& r : runs) {
-      if (r["profile"].get<std::string>().find(name) == std::string::npos) continue;
+      if (r["variant"].get<std::string>() != variant) continue;
       ++n;
       cov += r["coverage"].get<double>();
+      total += r["sim_time_s"].get<double>();
+      path += r["path_length_m"].get<double>();
       collisions += r["collisions"].get<std::size_t>();
+      self_stopped += r["stop_reason"].get<std::string>() == "explorer_done";
       if (!r["t_31m2_s"].is_null()) {
         t31 += r["t_31m2_s"].get<double>();
         ++n31;
@@ -401,13 +459,16 @@ int run_compare(const CompareOptions& o) {
         ++n90;
       }
     }
-    j["mean"][name] = {{"runs", n},
-                       {"coverage", n ? cov / n : 0.0},
-                       {"collisions", collisions},
-                       {"runs_reaching_31m2", n31},
-                       {"t_31m2_s", n31 ? nlohmann::json(t31 / n31) : nlohmann::json(nullptr)},
-                       {"runs_reaching_90pct", n90},
-                       {"t90_s", n90 ? nlohmann::json(t90 / n90) : nlohmann::json(nullptr)}};
+    j["mean"][variant] = {{"runs", n},
+                          {"coverage", n ? cov / n : 0.0},
+                          {"collisions", collisions},
+                          {"runs_stopped_by_themselves", self_stopped},
+                          {"t_total_s", n ? total / n : 0.0},
+                          {"path_length_m", n ? path / n : 0.0},
+                          {"runs_reaching_31m2", n31},
+                          {"t_31m2_s", n31 ? nlohmann::json(t31 / n31) : nlohmann::json(nullptr)},
+                          {"runs_reaching_90pct", n90},
+                          {"t90_s", n90 ? nlohmann::json(t90 / n90) : nlohmann::json(nullptr)}};
   }
   std::ofstream(out / "compare.json") << j.dump(2) << "\n";
   if (!o.quiet) std::fprintf(stderr, "duet compare: wrote %s/{compare.png, compare.csv, compare.json}\n%s\n", o.out.c_str(), j["mean"].dump(2).c_str());
@@ -449,6 +510,14 @@ void add_explore_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_flag("--no-loop-closure", o->no_loop_closure,
                 "no loop closure (LoopClosureSettings::enabled = false): the map is the front end's (odometry + scan matching)");
+  cmd->add_option("--strategy", o->strategy,
+                  "goal selection: profile (the profile's settings), paper (Fig. 6: partial map simulation, then the nearest "
+                  "frontier), nearest_frontier (Yamauchi) or explore_lite (its frontier cost)")
+      ->check(CLI::IsMember({"profile", "paper", "nearest_frontier", "explore_lite"}))
+      ->capture_default_str();
+  cmd->add_option("--on-done", o->on_done, "once explored: stay, or return_home (drive back to the start and stop there)")
+      ->check(CLI::IsMember({"stay", "return_home"}))
+      ->capture_default_str();
   cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
   cmd->callback([o, &exit_code] { exit_code = run_explore(*o); });
@@ -456,8 +525,12 @@ void add_explore_command(CLI::App& app, int& exit_code) {
 
 void add_compare_command(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<CompareOptions>();
-  auto* cmd = app.add_subcommand("compare", "Explore with dual and with single sensors over several seeds; plot both curves (Fig. 10)");
+  auto* cmd = app.add_subcommand("compare",
+                                 "Explore with several profiles and goal selection strategies over several seeds; plot the curves (Fig. 10)");
   cmd->add_option("-w,--world", o->world, "a built-in world (lab), a world YAML or a map_server map YAML")->capture_default_str();
+  cmd->add_option("--profiles", o->profiles, "comma-separated profiles (built-in names or YAML files)")->capture_default_str();
+  cmd->add_option("--strategies", o->strategies, "comma-separated strategies: paper, nearest_frontier, explore_lite, profile")
+      ->capture_default_str();
   cmd->add_option("-n,--seeds", o->seeds, "runs per profile")->capture_default_str();
   cmd->add_option("--first-seed", o->first_seed, "seed of the first run")->capture_default_str();
   cmd->add_option("-t,--max-time", o->max_time, "simulated time limit per run [s]")->capture_default_str();

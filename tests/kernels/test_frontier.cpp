@@ -827,5 +827,58 @@ TEST(Frontier, WillowMapFrontierAndPath) {
   }
 }
 
+// FrontierSelection::kExploreLite: explore_lite's cost (potential_scale * distance - gain_scale *
+// size) prefers a large frontier a little farther away over a small one next to the robot;
+// kNearest takes the nearest; with gain_scale = 0 the cost is the distance alone.
+TEST(Frontier, ExploreLiteCostPrefersLargeFrontiers) {
+  TestGrid tg = blank(100, 40, kFree);
+  tg.rect(0, 0, 99, 0, kOcc);
+  tg.rect(0, 39, 99, 39, kOcc);
+  tg.rect(0, 0, 0, 39, kOcc);
+  tg.rect(99, 0, 99, 39, kOcc);
+  tg.rect(15, 19, 16, 20, kNaN);  // small unknown pocket, ~10 cells from the robot
+  tg.rect(60, 8, 90, 31, kNaN);   // large unknown region, ~35 cells away
+  InflatedGrid g;
+  inflate(tg.view(), InflationSettings{}, g);
+  FrontierWorkspace ws;
+  const Eigen::Vector2f robot = g.cell_center(25, 20);
+  FrontierSettings s;
+  s.min_goal_distance_m = 0.0f;
+  const FrontierResult nearest = find_frontier(g, robot, GoalBlacklist{}, 0.0, s, ws);
+  ASSERT_EQ(nearest.status, FrontierStatus::kFound);
+  EXPECT_LT(g.cell_of(nearest.goal_xy).x(), 25);
+  s.selection = FrontierSelection::kExploreLite;
+  const FrontierResult lite = find_frontier(g, robot, GoalBlacklist{}, 0.0, s, ws);
+  ASSERT_EQ(lite.status, FrontierStatus::kFound);
+  EXPECT_GE(g.cell_of(lite.goal_xy).x(), 55);
+  // The goal is that cluster's nearest cell by path, and the path leads there.
+  ASSERT_FALSE(lite.path.empty());
+  EXPECT_EQ(g.cell_of(lite.path.back()), g.cell_of(lite.goal_xy));
+  EXPECT_NEAR(lite.path_length_m, (g.cell_of(lite.goal_xy) - Eigen::Vector2i(25, 20)).cast<float>().norm() * 0.05f, 0.5f);
+  // The same clusters and statuses as the nearest selection (only the choice differs).
+  ASSERT_EQ(lite.clusters.size(), nearest.clusters.size());
+  for (std::size_t k = 0; k < lite.clusters.size(); ++k) {
+    EXPECT_EQ(lite.clusters[k].cells, nearest.clusters[k].cells);
+    EXPECT_EQ(lite.clusters[k].path_length_m, nearest.clusters[k].path_length_m);
+  }
+  s.gain_scale = 0.0f;  // distance only: the small pocket again
+  EXPECT_LT(g.cell_of(find_frontier(g, robot, GoalBlacklist{}, 0.0, s, ws).goal_xy).x(), 25);
+  // Blacklisting the large region's goal moves explore_lite's choice to the other cluster.
+  s.gain_scale = 1.0f;
+  GoalBlacklist bl;
+  bl.add(lite.goal_xy, 0.0, 100.0);
+  s.blacklist_radius_m = 20.0f * 0.05f;
+  const FrontierResult second = find_frontier(g, robot, bl, 0.0, s, ws);
+  ASSERT_EQ(second.status, FrontierStatus::kFound);
+  EXPECT_GT((second.goal_xy - lite.goal_xy).norm(), s.blacklist_radius_m);
+  // Bad weights are named.
+  s.potential_scale = -1.0f;
+  EXPECT_THROW(validate(s), Error);
+  s.potential_scale = 3.0f;
+  s.gain_scale = NAN;
+  EXPECT_THROW(validate(s), Error);
+}
+
 }  // namespace
 }  // namespace duet
+

@@ -227,3 +227,29 @@ TEST(Plot, WritesAPngAndRejectsEmptyPlots) {
   o.width_px = 10;
   EXPECT_THROW(duet::write_plot_png(dir / "d.png", {s}, o), duet::Error);
 }
+
+// exploration.on_done = return_home: once nothing reachable is left, the robot drives back to
+// where it started and stops there; the stop reason says what was left and that it got home.
+TEST(SimExplore, ReturnsHomeWhenDone) {
+  duet::sim::ExploreSettings s = settings(1, 300.0);
+  s.runtime.explorer.on_done = duet::OnDone::kReturnHome;
+  duet::sim::SimExplore run(two_rooms(), duet::builtin_profile("dual_kinect_kobuki"), s);
+  run.run();
+  const auto sum = run.summary();
+  ASSERT_EQ(sum.stop_reason, duet::sim::StopReason::kExplorerDone) << sum.stop_detail;
+  EXPECT_EQ(sum.explorer_state, "done");
+  EXPECT_NE(sum.stop_detail.find("explored:"), std::string::npos) << sum.stop_detail;
+  EXPECT_NE(sum.stop_detail.find("returned home"), std::string::npos) << sum.stop_detail;
+  EXPECT_GE(sum.coverage, 0.95);
+  EXPECT_EQ(sum.collisions, 0u);
+  const duet::Pose2 end = run.chassis().true_pose();
+  const duet::Pose2 start = run.world().start;
+  EXPECT_LT(std::hypot(end.x - start.x, end.y - start.y), 0.35);  // the dynamic window's goal tolerance + odometry error
+  // Staying (the default) stops where the exploration ended.
+  duet::sim::SimExplore stay(two_rooms(), duet::builtin_profile("dual_kinect_kobuki"), settings(1, 300.0));
+  stay.run();
+  const auto st = stay.summary();
+  EXPECT_EQ(st.stop_reason, duet::sim::StopReason::kExplorerDone);
+  EXPECT_EQ(st.stop_detail.find("home"), std::string::npos) << st.stop_detail;
+  EXPECT_LT(st.sim_time_s, sum.sim_time_s);
+}

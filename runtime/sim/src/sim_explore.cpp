@@ -224,6 +224,8 @@ ExploreSummary SimExplore::summary() const {
   s.seed = settings_.seed;
   s.stop_reason = reason_;
   if (runtime_->state() == ExplorerState::kDone) s.explorer_status = duet::to_string(runtime_->stop_status());
+  s.stop_detail = runtime_->stop_detail();
+  s.explorer_state = duet::to_string(runtime_->state());
   s.sim_time_s = t_;
   s.wall_time_s = wall_elapsed_;
   const CurvePoint p = measure();

@@ -419,12 +419,20 @@ ExplorationProfile read_exploration(Reader& r, const YAML::Node& n, const Chassi
   }
   if (const YAML::Node b = m.get("frontier")) {
     FrontierSettings& f = ex.strategy.frontier;
-    MapReader q(r, b, m.path_of("frontier"), {"min_cluster_cells", "min_goal_distance_m", "blacklist_radius_m", "approach_radius_m", "min_unknown_region_m2"});
+    MapReader q(r, b, m.path_of("frontier"), {"min_cluster_cells", "min_goal_distance_m", "blacklist_radius_m", "approach_radius_m",
+                                              "min_unknown_region_m2", "selection", "potential_scale", "gain_scale"});
     q.opt_int("min_cluster_cells", f.min_cluster_cells, kAnyInt);
     q.opt_real("min_goal_distance_m", f.min_goal_distance_m);
     q.opt_real("blacklist_radius_m", f.blacklist_radius_m);
     q.opt_real("approach_radius_m", f.approach_radius_m);
     q.opt_real("min_unknown_region_m2", f.min_unknown_region_m2);
+    std::string selection = to_string(f.selection);
+    q.opt_string("selection", selection);
+    if (selection == "nearest") f.selection = FrontierSelection::kNearest;
+    else if (selection == "explore_lite") f.selection = FrontierSelection::kExploreLite;
+    else r.parse_error(q.get("selection"), q.path_of("selection"), "must be one of: nearest, explore_lite; got '" + selection + "'");
+    q.opt_real("potential_scale", f.potential_scale);
+    q.opt_real("gain_scale", f.gain_scale);
   }
   if (const YAML::Node b = m.get("simulation")) {
     PartialSimSettings& ps = ex.strategy.simulation;

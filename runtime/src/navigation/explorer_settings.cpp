@@ -8,6 +8,18 @@
 
 namespace duet {
 
+const char* to_string(OnDone d) { return d == OnDone::kReturnHome ? "return_home" : "stay"; }
+
+const char* to_string(ExplorerState s) {
+  switch (s) {
+    case ExplorerState::kIdle: return "idle";
+    case ExplorerState::kExploring: return "exploring";
+    case ExplorerState::kReturningHome: return "returning_home";
+    case ExplorerState::kDone: return "done";
+  }
+  return "unknown";
+}
+
 void validate(const ExplorerSettings& s) {
   auto positive = [](float v, const char* name) {
     if (!(std::isfinite(v) && v > 0.0f))

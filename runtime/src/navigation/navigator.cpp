@@ -74,6 +74,7 @@ NavSnapshot Navigator::snapshot() const {
   NavSnapshot s;
   s.state = state_;
   s.stop_status = stop_status_;
+  s.stop_detail = stop_detail_;
   s.have_map = have_map_;
   s.wait_for_map = wait_for_map_;
   s.goal_id = goal_id_;
@@ -99,6 +100,12 @@ void Navigator::stall(const Eigen::Vector2f& contact, double now_s) {
 
 void Navigator::goal_reached(std::uint64_t goal_id, double now_s) {
   if (!goal_ || goal_id != goal_id_) return;
+  if (returning_) {
+    drop_goal();
+    state_ = ExplorerState::kDone;
+    stop_detail_ += "; returned home";
+    return;
+  }
   ++stats_.goals_reached;
   // A frontier that is still a frontier after the robot stood at it and looked at it cannot
   // be observed from there (the inside of an obstacle behind a gap in its outline): never again.
@@ -390,6 +397,10 @@ bool Navigator::recheck_goal() {
 
 void Navigator::abandon_goal(int& counter, double now_s) {
   ++counter;
+  if (returning_) {  // on the way home: tried again from where the robot is
+    drop_goal();
+    return;
+  }
   // A view goal's frontier cell is not looked for again (the robot could not get to where it is
   // seen from); any other goal is blacklisted for a while.
   if (goal_ && view_active_) viewed_.add(view_target_, now_s, std::numeric_limits<double>::infinity());
@@ -406,6 +417,13 @@ void Navigator::drop_goal() {
 
 void Navigator::decide(const Pose2& robot, double now_s) {
   if (goal_ || wait_for_map_ || !have_map_ || state_ == ExplorerState::kDone) return;
+  if (returning_) {
+    if (!plan_home(robot, now_s)) {
+      state_ = ExplorerState::kDone;
+      stop_detail_ += "; no path home";
+    }
+    return;
+  }
   const auto start = std::chrono::steady_clock::now();
   struct Timer {  // records the whole decision's wall time on every return
     LatencyStats& out;
@@ -482,11 +500,8 @@ void Navigator::decide(const Pose2& robot, double now_s) {
         (decision_.status == ExplorationStatus::kAllUnreachable || decision_.status == ExplorationStatus::kAllBlacklisted))
       view = find_view(robot, now_s);
     if (!decision_.has_goal() && !view) {
-      if (++no_goal_decisions_ > settings_.final_retries) {
-        state_ = ExplorerState::kDone;
-        stop_status_ = decision_.status;
-      }
       wait_for_map_ = true;
+      if (++no_goal_decisions_ > settings_.final_retries) finish(robot, now_s);
       return;
     }
     if (view) {
@@ -517,6 +532,56 @@ void Navigator::decide(const Pose2& robot, double now_s) {
     goal_deadline_s_ = now_s + settings_.goal_timeout_s + length / settings_.nominal_speed_mps;
     ++goal_id_;  // the controller starts afresh on a new goal
   }
+}
+
+void Navigator::finish(const Pose2& robot, double now_s) {
+  stop_status_ = decision_.status;
+  const std::size_t left = decision_.frontier_searched ? decision_.frontier.frontier_cells : 0;
+  switch (stop_status_) {
+    case ExplorationStatus::kNoFrontier: stop_detail_ = "explored: no frontier left"; break;
+    case ExplorationStatus::kAllUnreachable:
+      stop_detail_ = "explored: " + std::to_string(left) + " frontier cells left, all unreachable from the robot";
+      break;
+    case ExplorationStatus::kAllBlacklisted:
+      stop_detail_ = "explored: " + std::to_string(left) +
+                     " frontier cells left, all looked at and not observable from where the robot can stand";
+      break;
+    case ExplorationStatus::kRobotBlocked: stop_detail_ = "gave up: the robot is blocked (no traversable cell around it)"; break;
+    default: stop_detail_ = std::string("stopped: ") + to_string(stop_status_); break;
+  }
+  if (settings_.on_done != OnDone::kReturnHome || trail_.empty()) {
+    state_ = ExplorerState::kDone;
+    return;
+  }
+  returning_ = true;
+  state_ = ExplorerState::kReturningHome;
+  wait_for_map_ = false;
+  if (!plan_home(robot, now_s)) {
+    state_ = ExplorerState::kDone;
+    stop_detail_ += "; no path home";
+  }
+}
+
+bool Navigator::plan_home(const Pose2& robot, double now_s) {
+  // A few tries (a goal abandoned on the way - time limit, stuck - is tried again from where
+  // the robot is), each at a later map update.
+  constexpr int kHomeAttempts = 3;
+  if (++home_attempts_ > kHomeAttempts) return false;
+  const Eigen::Vector2f home = trail_.front();
+  goal_ = Pose2{home.x(), home.y(), robot.theta};
+  goal_target_ = home;
+  view_active_ = false;
+  relaxed_active_ = false;
+  if (!recheck_goal() || !plan(robot)) {
+    drop_goal();
+    wait_for_map_ = true;  // try again on the next map
+    return home_attempts_ < kHomeAttempts;
+  }
+  float length = 0.0f;
+  for (std::size_t i = 1; i < path_.size(); ++i) length += (path_[i] - path_[i - 1]).norm();
+  goal_deadline_s_ = now_s + settings_.goal_timeout_s + length / settings_.nominal_speed_mps;
+  ++goal_id_;
+  return true;
 }
 
 }  // namespace duet

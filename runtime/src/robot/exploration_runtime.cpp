@@ -165,6 +165,11 @@ ExplorationStatus ExplorationRuntime::stop_status() const {
   return plan_ ? plan_->stop_status : ExplorationStatus::kNoFrontier;
 }
 
+std::string ExplorationRuntime::stop_detail() const {
+  if (!worker_) return explorer_.stop_detail();
+  return plan_ ? plan_->stop_detail : std::string();
+}
+
 ExplorerStats ExplorationRuntime::explorer_stats() const {
   if (!worker_) return explorer_.stats();
   return merge_stats(nav_stats_, explorer_.controller().stats());

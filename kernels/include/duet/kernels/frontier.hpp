@@ -67,6 +67,17 @@
 
 namespace duet {
 
+/// Which reachable frontier becomes the goal.
+enum class FrontierSelection {
+  kNearest,     ///< the nearest by path length (Yamauchi 1997; the paper's fallback)
+  /// explore_lite's frontier cost, per cluster: potential_scale * (Euclidean distance from the
+  /// robot to its nearest cell [m]) - gain_scale * (its size [cells] * resolution [m]); the
+  /// goal is the cheapest cluster's nearest eligible cell by path (explore_lite sends the
+  /// cluster's centroid to move_base; here the goal must be a cell the planner can reach).
+  kExploreLite,
+};
+[[nodiscard]] const char* to_string(FrontierSelection s);
+
 struct FrontierSettings {
   int min_cluster_cells = 3;         ///< smaller frontier clusters are ignored (noise) [cells], >= 1
   float min_goal_distance_m = 0.5f;  ///< frontier goals nearer than this (path length) are skipped [m], >= 0 (paper §4.2: goals 0.5-10 m away)
@@ -78,6 +89,9 @@ struct FrontierSettings {
   /// Frontier cells that border only enclosed unknown regions smaller than this are ignored (see
   /// the file comment) [m^2], >= 0; 0 = every unknown region counts.
   float min_unknown_region_m2 = 0.0f;
+  FrontierSelection selection = FrontierSelection::kNearest;
+  float potential_scale = 3.0f;  ///< kExploreLite: weight of the distance [1/m], [0, 1e3] (explore_lite's default 3)
+  float gain_scale = 1.0f;       ///< kExploreLite: weight of the size [1/m], [0, 1e3] (explore_lite's default 1)
 };
 /// Throws duet::Error(kInvalidArgument) naming the field and its range.
 void validate(const FrontierSettings& s);
@@ -164,6 +178,7 @@ struct FrontierWorkspace {
   std::vector<QueueEntry> q_orth, q_diag;
   std::vector<std::uint8_t> flags;         ///< search flags: traversable | frontier << 1 | border << 2
   std::vector<std::uint8_t> cand;          ///< per kept cluster: 0 none, 1 some candidate blocked, 2 goal-able
+  std::vector<std::int64_t> cluster_goal;  ///< per kept cluster: its nearest goal-able cell by path (-1: none)
   /// Search cost of each cell in units of resolution_m / 65536 (orthogonal step 65536, diagonal
   /// 92682); max = not reached, 0 for blocked cells. cost64 is used only for paths beyond ~65535 cells.
   std::vector<std::uint32_t> cost32;

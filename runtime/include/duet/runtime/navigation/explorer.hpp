@@ -32,6 +32,8 @@ class Explorer {
   [[nodiscard]] ExplorerState state() const noexcept { return navigator_.state(); }
   /// Why exploration stopped (kDone): the last decision's status.
   [[nodiscard]] ExplorationStatus stop_status() const noexcept { return navigator_.stop_status(); }
+  /// Why exploration stopped, in words (Navigator::stop_detail()).
+  [[nodiscard]] const std::string& stop_detail() const noexcept { return navigator_.stop_detail(); }
   /// The navigator's and the controller's counters together.
   [[nodiscard]] ExplorerStats stats() const;
   [[nodiscard]] const std::optional<Pose2>& goal() const noexcept { return navigator_.goal(); }

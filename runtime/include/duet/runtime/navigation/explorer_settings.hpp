@@ -12,12 +12,19 @@
 
 namespace duet {
 
+/// What the robot does once nothing reachable is left to explore (the paper: remain in place).
+enum class OnDone { kStay, kReturnHome };
+[[nodiscard]] const char* to_string(OnDone d);
+
 struct ExplorerSettings {
   // ---- goal life cycle (Navigator)
   float goal_timeout_s = 20.0f;       ///< fixed part of a goal's time limit [s], (0, inf)
   float nominal_speed_mps = 0.3f;     ///< path length / this is added to the time limit [m/s], (0, inf)
   float blacklist_ttl_s = 60.0f;      ///< how long an abandoned goal stays blacklisted [s], (0, inf]
   int final_retries = 3;              ///< decisions at later map updates before giving up, [0, 1000]
+  /// Once explored: stay where the robot is, or drive back to where it started (the first
+  /// position of its trail) and stop there.
+  OnDone on_done = OnDone::kStay;
   /// Exploration is complete when no reachable frontier is left, even if the partial map
   /// simulation still offers a goal: its reward (Eq. 5) never reaches zero, because known cells
   /// below the log-odds clamp keep gaining from re-observation, so R_g <= eps_R alone never
@@ -78,10 +85,12 @@ struct ExplorerSettings {
 void validate(const ExplorerSettings& s);
 
 enum class ExplorerState {
-  kIdle,        ///< no map yet
-  kExploring,   ///< following a goal
-  kDone,        ///< stopped; see stop_status()
+  kIdle,           ///< no map yet
+  kExploring,      ///< following a goal
+  kReturningHome,  ///< explored; driving back to the start (OnDone::kReturnHome)
+  kDone,           ///< stopped; see stop_status() and stop_detail()
 };
+[[nodiscard]] const char* to_string(ExplorerState s);
 
 /// Counters and timings of one run (decision time is the wall time of a decision).
 struct ExplorerStats {

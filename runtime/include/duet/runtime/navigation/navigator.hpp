@@ -41,6 +41,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace duet {
@@ -65,6 +66,7 @@ struct NavPlanView {
 struct NavSnapshot {
   ExplorerState state = ExplorerState::kIdle;
   ExplorationStatus stop_status = ExplorationStatus::kNoFrontier;
+  std::string stop_detail;
   bool have_map = false;
   bool wait_for_map = false;
   std::uint64_t goal_id = 0;
@@ -106,6 +108,10 @@ class Navigator {
 
   [[nodiscard]] ExplorerState state() const noexcept { return state_; }
   [[nodiscard]] ExplorationStatus stop_status() const noexcept { return stop_status_; }
+  /// Why exploration stopped, in words: "explored: no frontier left", "explored: N frontier
+  /// cells left, all unreachable ...", "gave up: ..." - and, with OnDone::kReturnHome, whether
+  /// the robot got home. Empty while exploring.
+  [[nodiscard]] const std::string& stop_detail() const noexcept { return stop_detail_; }
   [[nodiscard]] const ExplorerStats& stats() const noexcept { return stats_; }
   [[nodiscard]] const std::optional<Pose2>& goal() const noexcept { return goal_; }
   [[nodiscard]] const std::vector<Eigen::Vector2f>& path() const noexcept { return path_; }
@@ -136,6 +142,10 @@ class Navigator {
   bool recheck_goal();
   void build_relaxed();
   bool try_relaxed(const Pose2& robot, double now_s);
+  /// Nothing left to explore: stop, or (OnDone::kReturnHome) start driving home.
+  void finish(const Pose2& robot, double now_s);
+  /// A goal at the start position and a path to it; false if none.
+  bool plan_home(const Pose2& robot, double now_s);
   [[nodiscard]] std::optional<Pose2> find_view(const Pose2& robot, double now_s);
 
   Profile profile_;
@@ -178,6 +188,9 @@ class Navigator {
   std::vector<DecisionRecord> log_;
   std::vector<Eigen::Vector2f> frontier_xy_;
   LatencyStats decide_latency_;
+  bool returning_ = false;       ///< driving home (OnDone::kReturnHome)
+  int home_attempts_ = 0;        ///< paths home tried
+  std::string stop_detail_;
 };
 
 }  // namespace duet

@@ -44,6 +44,7 @@
 #include <mutex>
 #include <optional>
 #include <span>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -128,6 +129,7 @@ class ExplorationRuntime {
   [[nodiscard]] const Twist& last_command() const noexcept { return last_cmd_; }
   [[nodiscard]] ExplorerState state() const;
   [[nodiscard]] ExplorationStatus stop_status() const;
+  [[nodiscard]] std::string stop_detail() const;
   [[nodiscard]] ExplorerStats explorer_stats() const;
   /// The latest map's grid (valid until the next tick()).
   [[nodiscard]] const OccupancyGrid& map_grid() const;

@@ -87,6 +87,8 @@ struct ExploreSummary {
   std::uint64_t seed = 0;
   StopReason stop_reason = StopReason::kRunning;
   std::string explorer_status;           ///< the explorer's last decision status (when done)
+  std::string stop_detail;               ///< why the explorer stopped, in words (Navigator::stop_detail())
+  std::string explorer_state;            ///< idle, exploring, returning_home or done
   double sim_time_s = 0.0;
   double wall_time_s = 0.0;
   double explored_area_m2 = 0.0;
