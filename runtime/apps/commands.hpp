@@ -1,9 +1,18 @@
 #pragma once
 // Sub-commands of the `duet` program; each registers itself on the CLI11 app and runs from
 // its callback, setting exit_code.
+#include <duet/runtime/config/profile.hpp>
+
 #include <CLI/CLI.hpp>
 
+#include <string>
+#include <vector>
+
 namespace duet::app {
+
+/// --config FILE and --set KEY=VALUE on a sub-command (profile_command.cpp), and the overlays they give.
+void add_overlay_options(CLI::App* cmd, std::vector<std::string>& configs, std::vector<std::string>& sets);
+[[nodiscard]] std::vector<ProfileOverlay> overlays(const std::vector<std::string>& configs, const std::vector<std::string>& sets);
 
 void add_map_command(CLI::App& app, int& exit_code);
 void add_profile_command(CLI::App& app, int& exit_code);

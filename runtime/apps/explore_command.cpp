@@ -39,14 +39,11 @@ struct ExploreOptions {
   std::string execution = "auto";
   bool true_pose = false;
   bool raw_odometry = false;
-  float recent_obstacles_s = 0.0f;
-  float cornered_after_s = 0.0f;
-  float slow_clearance_m = -1.0f;  // < 0: the explorer's default
-  float slow_speed_mps = -1.0f;
   float gyro_noise = 0.0f;
   bool no_loop_closure = false;
-  std::string on_done = "stay";
+  std::string on_done;  // empty: the profile's exploration.on_done
   std::string strategy = "profile";
+  std::vector<std::string> configs, sets;
   bool quiet = false;
 };
 
@@ -54,6 +51,7 @@ struct CompareOptions {
   std::string world = "lab";
   std::string profiles = "dual,single";
   std::string strategies = "paper";
+  std::vector<std::string> configs, sets;
   int seeds = 3;
   std::uint64_t first_seed = 1;
   double max_time = 600.0;
@@ -305,6 +303,7 @@ void print_progress(const sim::SimExplore& run, bool tty, const char* prefix) {
 
 sim::ExploreSettings make_settings(const Profile& profile, std::uint64_t seed, double max_time, double sensor_rate) {
   sim::ExploreSettings es;
+  es.runtime = profile.runtime;  // the profile's settings tree (runtime, localization, exploration, control)
   es.seed = seed;
   es.max_time_s = max_time;
   if (sensor_rate < 0.0) {
@@ -322,21 +321,18 @@ int run_explore(const ExploreOptions& o) {
     fail(ErrorCode::kInvalidArgument, "--max-time must be in (0, 1e6] s, got " + std::to_string(o.max_time));
   const double rate = parse_sensor_rate(o.sensor_rate);
   sim::World world = sim::resolve_world(o.world);
-  Profile profile = resolve_profile(o.profile);
+  Profile profile = resolve_profile(o.profile, overlays(o.configs, o.sets));
   apply_strategy(profile, o.strategy);
   sim::ExploreSettings es = make_settings(profile, o.seed, o.max_time, rate);
   es.realtime = o.realtime;
+  // Flags given on the command line override the profile; absent ones leave it.
   if (o.execution == "background" || (o.execution == "auto" && o.realtime)) es.runtime.execution = Execution::kBackground;
-  else if (o.execution != "lockstep" && o.execution != "auto")
-    fail(ErrorCode::kInvalidArgument, "--execution '" + o.execution + "': expected auto, lockstep or background");
+  else if (o.execution == "lockstep") es.runtime.execution = Execution::kLockstep;
   es.use_true_pose = o.true_pose;
-  es.runtime.explorer.on_done = o.on_done == "return_home" ? OnDone::kReturnHome : OnDone::kStay;
-  es.runtime.pose_correction.enabled = !o.raw_odometry;
-  es.runtime.loop_closure.enabled = !o.no_loop_closure;
-  es.runtime.explorer.recent_obstacles_s = o.recent_obstacles_s;
-  es.runtime.explorer.cornered_after_s = o.cornered_after_s;
-  if (o.slow_clearance_m >= 0.0f) es.runtime.explorer.slow_clearance_m = o.slow_clearance_m;
-  if (o.slow_speed_mps >= 0.0f) es.runtime.explorer.slow_speed_mps = o.slow_speed_mps;
+  if (o.on_done == "return_home") es.runtime.explorer.on_done = OnDone::kReturnHome;
+  else if (o.on_done == "stay") es.runtime.explorer.on_done = OnDone::kStay;
+  if (o.raw_odometry) es.runtime.pose_correction.enabled = false;
+  if (o.no_loop_closure) es.runtime.loop_closure.enabled = false;
   if (o.gyro_noise != 0.0f) {
     es.chassis = sim::ChassisSimSettings::from_profile(profile.chassis);
     es.chassis->gyro_heading = true;  // as the default chassis (the Kobuki's gyro heading)
@@ -378,8 +374,9 @@ int run_compare(const CompareOptions& o) {
   if (o.seeds < 1 || o.seeds > 1000) fail(ErrorCode::kInvalidArgument, "--seeds must be in [1, 1000]");
   const std::vector<std::string> profiles = split_list(o.profiles), strategies = split_list(o.strategies);
   if (profiles.empty() || strategies.empty()) fail(ErrorCode::kInvalidArgument, "--profiles and --strategies must name at least one each");
+  const std::vector<ProfileOverlay> over = overlays(o.configs, o.sets);
   for (const auto& st : strategies) {
-    Profile probe = resolve_profile(profiles.front());
+    Profile probe = resolve_profile(profiles.front(), over);
     apply_strategy(probe, st);  // a bad name fails before any run
   }
   const sim::World world = sim::resolve_world(o.world);
@@ -401,7 +398,7 @@ int run_compare(const CompareOptions& o) {
         variants.push_back(variant);
         for (int k = 0; k < o.seeds; ++k) {
           const std::uint64_t seed = o.first_seed + static_cast<std::uint64_t>(k);
-          Profile profile = resolve_profile(pname);
+          Profile profile = resolve_profile(pname, over);
           apply_strategy(profile, strategy);
           sim::ExploreSettings es = make_settings(profile, seed, o.max_time, 0.0);
           sim::SimExplore run(world, std::move(profile), es);
@@ -491,33 +488,27 @@ void add_explore_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--realtime", o->realtime, "pace the simulation by the wall clock (the runtime then runs in the background mode)");
   cmd->add_option("--execution", o->execution,
                   "runtime execution: lockstep (map updates and decisions inside the control period: deterministic), background "
-                  "(they run as background tasks and control never waits, as on a robot) or auto (background with --realtime)")
+                  "(they run as background tasks and control never waits, as on a robot) or auto (background with --realtime, "
+                  "else the profile's runtime.execution)")
       ->check(CLI::IsMember({"auto", "lockstep", "background"}))
       ->capture_default_str();
   cmd->add_flag("--true-pose", o->true_pose, "DEBUGGING: map with the true pose instead of the wheel odometry");
   cmd->add_flag("--raw-odometry", o->raw_odometry, "pose = the raw wheel odometry (no scan-to-map correction)");
-  cmd->add_option("--recent-obstacles", o->recent_obstacles_s,
-                  "EXPERIMENTAL: obstacles of the last this many seconds block the dynamic window (ExplorerSettings::recent_obstacles_s; 0 = off)")
-      ->capture_default_str();
-  cmd->add_option("--cornered-after", o->cornered_after_s,
-                  "EXPERIMENTAL: escape a spot the dynamic window keeps the robot on this long [s] (ExplorerSettings::cornered_after_s; 0 = off)")
-      ->capture_default_str();
-  cmd->add_option("--slow-clearance", o->slow_clearance_m,
-                  "slow zone: below this clearance [m] the top speed falls towards --slow-speed (ExplorerSettings::slow_clearance_m; 0 = off)");
-  cmd->add_option("--slow-speed", o->slow_speed_mps, "slow zone: top speed at the dynamic window's margin [m/s] (ExplorerSettings::slow_speed_mps)");
   cmd->add_option("--gyro-noise", o->gyro_noise,
                   "simulated gyro's rate-noise density [rad/s/sqrt(Hz)], [0, 0.01] (ChassisSimSettings::gyro_noise_density; 0 = none)")
       ->capture_default_str();
   cmd->add_flag("--no-loop-closure", o->no_loop_closure,
                 "no loop closure (LoopClosureSettings::enabled = false): the map is the front end's (odometry + scan matching)");
+  add_overlay_options(cmd, o->configs, o->sets);
   cmd->add_option("--strategy", o->strategy,
                   "goal selection: profile (the profile's settings), paper (Fig. 6: partial map simulation, then the nearest "
                   "frontier), nearest_frontier (Yamauchi) or explore_lite (its frontier cost)")
       ->check(CLI::IsMember({"profile", "paper", "nearest_frontier", "explore_lite"}))
       ->capture_default_str();
-  cmd->add_option("--on-done", o->on_done, "once explored: stay, or return_home (drive back to the start and stop there)")
-      ->check(CLI::IsMember({"stay", "return_home"}))
-      ->capture_default_str();
+  cmd->add_option("--on-done", o->on_done,
+                  "once explored: stay, or return_home (drive back to the start and stop there); default: the profile's "
+                  "exploration.on_done")
+      ->check(CLI::IsMember({"stay", "return_home"}));
   cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
   cmd->callback([o, &exit_code] { exit_code = run_explore(*o); });
@@ -531,6 +522,7 @@ void add_compare_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--profiles", o->profiles, "comma-separated profiles (built-in names or YAML files)")->capture_default_str();
   cmd->add_option("--strategies", o->strategies, "comma-separated strategies: paper, nearest_frontier, explore_lite, profile")
       ->capture_default_str();
+  add_overlay_options(cmd, o->configs, o->sets);
   cmd->add_option("-n,--seeds", o->seeds, "runs per profile")->capture_default_str();
   cmd->add_option("--first-seed", o->first_seed, "seed of the first run")->capture_default_str();
   cmd->add_option("-t,--max-time", o->max_time, "simulated time limit per run [s]")->capture_default_str();

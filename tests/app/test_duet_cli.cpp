@@ -164,6 +164,19 @@ TEST(DuetCli, ProfileCommand) {
   const CliRun r = run("profile " + bad.string());
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("broken.yaml"), std::string::npos) << r.output;
+  // The printed tree loads back (and prints the same), with overlays applied.
+  const fs::path tree = temp_dir("profile-tree") / "tree.yaml";
+  const CliRun set = run("profile dual --set exploration.view_range_m=3 --set runtime.execution=background");
+  ASSERT_EQ(set.code, 0) << set.output;
+  EXPECT_NE(set.output.find("view_range_m: 3\n"), std::string::npos) << set.output;
+  EXPECT_NE(set.output.find("execution: background"), std::string::npos) << set.output;
+  std::ofstream(tree) << set.output;
+  const CliRun again = run("profile " + tree.string());
+  EXPECT_EQ(again.code, 0) << again.output;
+  EXPECT_EQ(again.output, set.output);
+  const CliRun check = run("profile " + tree.string() + " --check");
+  EXPECT_EQ(check.code, 0) << check.output;
+  EXPECT_NE(check.output.find("OK"), std::string::npos) << check.output;
 }
 
 // ---- duet explore / duet compare -----------------------------------------------------------
@@ -263,12 +276,15 @@ TEST(DuetCli, ExploreErrorsNameTheFileAndTheProblem) {
   r = run("explore -q --world lab --sensor-rate fast --out " + (dir / "o").string());
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("--sensor-rate"), std::string::npos) << r.output;
-  r = run("explore -q --world lab --recent-obstacles -1 --out " + (dir / "o").string());
+  r = run("explore -q --world lab --set exploration.recent_obstacles_s=-1 --out " + (dir / "o").string());
   EXPECT_NE(r.code, 0);
-  EXPECT_NE(r.output.find("recent_obstacles_s"), std::string::npos) << r.output;
-  r = run("explore -q --world lab --cornered-after -2 --out " + (dir / "o").string());
+  EXPECT_NE(r.output.find("--set exploration.recent_obstacles_s=-1: exploration.recent_obstacles_s"), std::string::npos) << r.output;
+  r = run("explore -q --world lab --set control.cornered_after_s=-2 --out " + (dir / "o").string());
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("cornered_after_s"), std::string::npos) << r.output;
+  r = run("explore -q --world lab --strategy greedy --out " + (dir / "o").string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("--strategy"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "o" / "summary.json"));
 }
 

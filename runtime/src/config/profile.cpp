@@ -6,6 +6,7 @@
 #include <duet/kernels/error.hpp>
 #include <duet/runtime/config/profile.hpp>
 
+#include "config/settings_yaml.hpp"
 #include "config/yaml_reader.hpp"
 
 #include <yaml-cpp/yaml.h>
@@ -18,6 +19,7 @@
 #include <functional>
 #include <initializer_list>
 #include <limits>
+#include <regex>
 #include <sstream>
 #include <unordered_map>
 #include <unordered_set>
@@ -101,12 +103,29 @@ class Checker {
   void range(const std::string& path, double v, const Range& r) const {
     if (!in_range(v, r)) fail_at(path, "must be in " + describe(r) + ", got " + format_number(v));
   }
+  /// Runs a kernel's validate(); its message names the field ("Struct.field" or
+  /// "Struct::field"), so the error points at that key where it was read (file, overlay).
   template <class F>
   void kernel(const std::string& path, F&& f) const {
     try {
       f();
     } catch (const Error& e) {
-      fail_at(path, std::string("rejected by the kernel: ") + e.what());
+      // The keys of this section the message names; of those, one an overlay set (the value
+      // just changed is the likelier culprit of a cross-field constraint), else the first.
+      const std::string msg = e.what();
+      static const std::regex word(R"([a-z][a-z_0-9]*)");
+      std::string at = path;
+      bool from_overlay = false;
+      for (auto it = std::sregex_iterator(msg.begin(), msg.end(), word); it != std::sregex_iterator(); ++it) {
+        const std::string key = path + "." + it->str();
+        if (!loc_.has(key)) continue;
+        if (at == path) at = key;
+        if (!from_overlay && loc_.from_overlay(key)) {
+          at = key;
+          from_overlay = true;
+        }
+      }
+      fail_at(at, "rejected by the kernel: " + msg);
     }
   }
 
@@ -234,6 +253,7 @@ void validate_impl(const Profile& p, const Locator& loc) {
   c.kernel("exploration.frontier", [&] { validate(ex.strategy.frontier); });
   c.kernel("exploration.simulation", [&] { validate(ex.strategy.simulation); });
   c.kernel("exploration", [&] { validate(ex.strategy); });
+  c.kernel("runtime", [&] { validate(p.runtime); });
   c.kernel("exploration.dwa", [&] {
     validate(ex.dwa.limits);
     validate(ex.dwa);
@@ -385,9 +405,10 @@ ExplorationProfile read_exploration(Reader& r, const YAML::Node& n, const Chassi
   ex.strategy.simulation.v_min_mps = std::min(ex.strategy.simulation.v_min_mps, ex.strategy.simulation.v_max_mps);
   // The inflation radius defaults to the chassis radius plus 2 cm when that exceeds 0.20 m.
   ex.inflation.robot_radius_m = std::max(ex.inflation.robot_radius_m, chassis.radius_m + 0.02f);
-  MapReader m(r, n, "exploration",
-              {"rays_per_sensor", "cells", "observation", "inflation", "path", "frontier", "simulation", "eps_r_bits",
-               "use_simulation", "dwa"});
+  std::vector<std::string_view> keys = {"rays_per_sensor", "cells",      "observation",  "inflation",     "path", "frontier",
+                                        "simulation",      "eps_r_bits", "use_simulation", "dwa"};
+  for (const std::string_view k : detail::exploration_goal_keys()) keys.push_back(k);  // the goal life cycle's (settings_yaml.cpp)
+  MapReader m(r, n, "exploration", std::move(keys));
   m.opt_int("rays_per_sensor", ex.rays_per_sensor, kRaysPerSensor);
   if (const YAML::Node b = m.get("cells")) {
     MapReader q(r, b, m.path_of("cells"), {"occupied_logodds", "free_logodds"});
@@ -515,7 +536,7 @@ ExplorationProfile read_exploration(Reader& r, const YAML::Node& n, const Chassi
 Profile parse_root(Reader& r, const YAML::Node& root, const std::string& source) {
   if (!root || root.IsNull())
     fail(ErrorCode::kParse, source + ": the document is empty; expected a mapping with keys {name, chassis, sensors}");
-  MapReader m(r, root, "", {"name", "description", "chassis", "sensors", "mapping", "exploration"});
+  MapReader m(r, root, "", {"name", "description", "chassis", "sensors", "mapping", "exploration", "control", "localization", "runtime"});
   Profile p;
   m.need_string("name", p.name);
   m.opt_string("description", p.description);
@@ -535,6 +556,7 @@ Profile parse_root(Reader& r, const YAML::Node& root, const std::string& source)
   } else {
     p.exploration = read_exploration(r, YAML::Node(YAML::NodeType::Map), p.chassis);
   }
+  p.runtime = detail::read_runtime_settings(r, root, p.runtime);
   return p;
 }
 
@@ -592,13 +614,23 @@ void validate(const Profile& profile, std::string_view source_name) {
   validate_impl(profile, loc);
 }
 
-Profile parse_profile(std::string_view yaml_text, std::string_view source_name) {
+Profile parse_profile(std::string_view yaml_text, std::string_view source_name, std::span<const ProfileOverlay> overlays) {
   Locator loc{std::string(source_name)};
   YAML::Node root;
   try {
     root = YAML::Load(std::string(yaml_text));
   } catch (const YAML::Exception& e) {
     fail(ErrorCode::kParse, loc.at(e.mark) + ": malformed YAML: " + e.msg);
+  }
+  for (const ProfileOverlay& o : overlays) {
+    YAML::Node doc;
+    try {
+      doc = YAML::Load(o.yaml);
+    } catch (const YAML::Exception& e) {
+      fail(ErrorCode::kParse, Locator(o.source).at(e.mark) + ": malformed YAML: " + e.msg);
+    }
+    if (!root || !root.IsMap()) break;  // parse_root reports the profile's own problem
+    detail::merge_overlay(root, doc, loc, o.source);
   }
   Reader reader(loc);
   Profile p;
@@ -613,7 +645,18 @@ Profile parse_profile(std::string_view yaml_text, std::string_view source_name) 
   return p;
 }
 
-Profile load_profile(const std::filesystem::path& path) {
+ProfileOverlay file_overlay(const std::filesystem::path& path) {
+  const std::string name = path.string();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) fail(ErrorCode::kIo, name + ": overlay file not found (or not a regular file)");
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (!in || in.bad()) fail(ErrorCode::kIo, name + ": cannot read the overlay file");
+  return ProfileOverlay{name, text.str()};
+}
+
+Profile load_profile(const std::filesystem::path& path, std::span<const ProfileOverlay> overlays) {
   const std::string name = path.string();
   std::error_code ec;
   if (!std::filesystem::exists(path, ec))
@@ -625,7 +668,7 @@ Profile load_profile(const std::filesystem::path& path) {
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) fail(ErrorCode::kIo, name + ": read error");
-  return parse_profile(text.str(), name);
+  return parse_profile(text.str(), name, overlays);
 }
 
 std::vector<std::string> builtin_profile_names() {
@@ -647,12 +690,13 @@ Profile builtin_profile(std::string_view name) {
   return parse_profile(text, "<builtin " + std::string(canonical_builtin_name(name)) + ".yaml>");
 }
 
-Profile resolve_profile(std::string_view name_or_path) {
+Profile resolve_profile(std::string_view name_or_path, std::span<const ProfileOverlay> overlays) {
   const std::string s(name_or_path);
   std::error_code ec;
   const bool looks_like_path = s.find('/') != std::string::npos || s.ends_with(".yaml") || s.ends_with(".yml");
-  if (looks_like_path || std::filesystem::is_regular_file(s, ec)) return load_profile(s);
-  return builtin_profile(s);
+  if (looks_like_path || std::filesystem::is_regular_file(s, ec)) return load_profile(s, overlays);
+  if (overlays.empty()) return builtin_profile(s);
+  return parse_profile(builtin_profile_text(s), "<builtin " + std::string(canonical_builtin_name(s)) + ".yaml>", overlays);
 }
 
 }  // namespace duet

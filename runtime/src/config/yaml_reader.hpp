@@ -68,27 +68,54 @@ inline bool in_range(double v, const Range& r) {
 class Locator {
  public:
   explicit Locator(std::string source) : source_(std::move(source)) {}
-  void record(const std::string& path, const YAML::Mark& mark) { marks_[path] = mark; }
-  [[nodiscard]] std::string at(const YAML::Mark& mark) const {
-    if (mark.is_null() || mark.line < 0) return source_;
-    return source_ + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
+  /// Nodes that came from an overlay (config/profile.hpp: --config, --set) are located in it.
+  void add_overlay(const YAML::Node& n, const std::string& source) {
+    overlay_.emplace_back(n, source);
+    if (n.IsMap())
+      for (const auto& kv : n) {
+        add_overlay(kv.first, source);
+        add_overlay(kv.second, source);
+      }
+    else if (n.IsSequence())
+      for (const auto& e : n) add_overlay(e, source);
   }
+  void record(const std::string& path, const YAML::Node& n) { marks_[path] = {source_of(n), n.Mark()}; }
+  void record(const std::string& path, const YAML::Mark& mark) { marks_[path] = {source_, mark}; }
+  [[nodiscard]] std::string at(const YAML::Mark& mark) const { return at(source_, mark); }
+  [[nodiscard]] std::string at(const YAML::Node& n) const { return at(source_of(n), n.Mark()); }
   [[nodiscard]] std::string where(const std::string& path) const {
     // The key itself, else its nearest recorded parent.
     std::string p = path;
     while (true) {
       auto it = marks_.find(p);
-      if (it != marks_.end()) return at(it->second);
+      if (it != marks_.end()) return at(it->second.first, it->second.second);
       const auto cut = p.find_last_of(".[");
       if (cut == std::string::npos || cut == 0) return source_;
       p.resize(cut);
     }
   }
   [[nodiscard]] const std::string& source() const noexcept { return source_; }
+  [[nodiscard]] bool has(const std::string& path) const { return marks_.count(path) != 0; }
+  /// The key at `path` was read from an overlay.
+  [[nodiscard]] bool from_overlay(const std::string& path) const {
+    const auto it = marks_.find(path);
+    return it != marks_.end() && it->second.first != source_;
+  }
 
  private:
+  [[nodiscard]] std::string source_of(const YAML::Node& n) const {
+    for (const auto& [o, src] : overlay_)
+      if (o.is(n)) return src;
+    return source_;
+  }
+  /// "file:line:col"; an overlay from the command line (--set) has no lines.
+  [[nodiscard]] static std::string at(const std::string& source, const YAML::Mark& mark) {
+    if (mark.is_null() || mark.line < 0 || source.starts_with("--set")) return source;
+    return source + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
+  }
   std::string source_;
-  std::unordered_map<std::string, YAML::Mark> marks_;
+  std::unordered_map<std::string, std::pair<std::string, YAML::Mark>> marks_;
+  std::vector<std::pair<YAML::Node, std::string>> overlay_;
 };
 
 inline std::string join_path(const std::string& parent, std::string_view key) {
@@ -132,9 +159,14 @@ class Reader {
   explicit Reader(Locator& loc) : loc_(loc) {}
 
   [[noreturn]] void parse_error(const YAML::Node& n, const std::string& path, const std::string& msg) const {
-    fail(ErrorCode::kParse, loc_.at(n.Mark()) + ": " + path + ": " + msg);
+    fail(ErrorCode::kParse, loc_.at(n) + ": " + path + ": " + msg);
   }
-  void record(const std::string& path, const YAML::Node& n) { loc_.record(path, n.Mark()); }
+  /// A value of the right type out of its range (kInvalidArgument).
+  [[noreturn]] void invalid(const YAML::Node& n, const std::string& path, const std::string& msg) const {
+    fail(ErrorCode::kInvalidArgument, loc_.at(n) + ": " + path + ": " + msg);
+  }
+  void record(const std::string& path, const YAML::Node& n) { loc_.record(path, n); }
+  [[nodiscard]] Locator& locator() noexcept { return loc_; }
 
   double number(const YAML::Node& n, const std::string& path) {
     record(path, n);
@@ -147,7 +179,7 @@ class Reader {
       parse_error(n, path, "expected a number, got " + node_kind(n));
     if (!std::isfinite(v) || std::fabs(v) > static_cast<double>(std::numeric_limits<float>::max()))
       fail(ErrorCode::kInvalidArgument,
-           loc_.at(n.Mark()) + ": " + path + ": must be a finite number, got " + n.Scalar());
+           loc_.at(n) + ": " + path + ": must be a finite number, got " + n.Scalar());
     return v;
   }
   float real(const YAML::Node& n, const std::string& path) { return static_cast<float>(number(n, path)); }
@@ -161,11 +193,11 @@ class Reader {
     const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
     if (ec == std::errc::result_out_of_range)
       fail(ErrorCode::kInvalidArgument,
-           loc_.at(n.Mark()) + ": " + path + ": must be in " + describe(r) + ", got " + n.Scalar());
+           loc_.at(n) + ": " + path + ": must be in " + describe(r) + ", got " + n.Scalar());
     if (ec != std::errc() || end != s.data() + s.size() || s.empty())
       parse_error(n, path, "expected an integer, got " + node_kind(n));
     if (!in_range(static_cast<double>(v), r))
-      fail(ErrorCode::kInvalidArgument, loc_.at(n.Mark()) + ": " + path + ": must be in " + describe(r) +
+      fail(ErrorCode::kInvalidArgument, loc_.at(n) + ": " + path + ": must be in " + describe(r) +
                                             ", got " + std::to_string(v));
     return v;
   }
@@ -173,7 +205,7 @@ class Reader {
   void range(const YAML::Node& n, const std::string& path, double v, const Range& r) const {
     if (!in_range(v, r))
       fail(ErrorCode::kInvalidArgument,
-           loc_.at(n.Mark()) + ": " + path + ": must be in " + describe(r) + ", got " + format_number(v));
+           loc_.at(n) + ": " + path + ": must be in " + describe(r) + ", got " + format_number(v));
   }
 
   bool boolean(const YAML::Node& n, const std::string& path) {
@@ -214,7 +246,9 @@ class Reader {
 class MapReader {
  public:
   MapReader(Reader& r, const YAML::Node& node, std::string path, std::initializer_list<const char*> keys)
-      : r_(r), node_(node), path_(std::move(path)), keys_(keys.begin(), keys.end()) {
+      : MapReader(r, node, std::move(path), std::vector<std::string_view>(keys.begin(), keys.end())) {}
+  MapReader(Reader& r, const YAML::Node& node, std::string path, std::vector<std::string_view> keys)
+      : r_(r), node_(node), path_(std::move(path)), keys_(std::move(keys)) {
     const std::string shown = path_.empty() ? "top level" : path_;
     if (!node_.IsMap())
       r_.parse_error(node_, shown, "expected a mapping with keys {" + key_list() + "}, got " + node_kind(node_));
@@ -229,7 +263,7 @@ class MapReader {
         std::string msg = "unknown key";
         if (const std::string s = suggestion(key); !s.empty()) msg += " (did you mean '" + s + "'?)";
         msg += "; allowed keys here: {" + key_list() + "}";
-        r_.parse_error(k, kp, msg);
+        r_.parse_error(k.Mark().is_null() ? YAML::Node(kv.second) : k, kp, msg);  // an overlay's key: located by its value
       }
       if (!seen.insert(key).second) r_.parse_error(k, kp, "duplicate key");
     }

@@ -18,6 +18,7 @@
 /// frame x forward, y left, z up; its optical frame z forward, x right, y down.
 ///
 /// Thread safety: all functions are reentrant (no global mutable state); Profile is a value type.
+#include <duet/runtime/robot/runtime_settings.hpp>
 #include <duet/kernels/back_projection.hpp>
 #include <duet/kernels/dwa.hpp>
 #include <duet/kernels/exploration.hpp>
@@ -32,6 +33,7 @@
 #include <Eigen/Geometry>
 
 #include <filesystem>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -149,17 +151,40 @@ struct Profile {
   std::vector<SensorProfile> sensors;  ///< 1 to 16 sensors (required)
   MappingSettings mapping;             ///< (optional)
   ExplorationProfile exploration;      ///< (optional)
+  /// The runtime's settings (optional): YAML sections `runtime` (rates, execution,
+  /// synchronizer), `localization` (pose_correction, loop_closure), the goal life cycle's keys
+  /// in `exploration` and the controller's behaviours in `control` (see to_yaml() for the tree).
+  RuntimeSettings runtime;
 };
 
 /// The observation model's fan of each sensor (paper §3.1): origin (x, y) and yaw from the
 /// extrinsics (Eq. (6)), the horizontal field of view, the depth range, rays_per_sensor rays.
 [[nodiscard]] std::vector<SensorSector> observation_sectors(const Profile& profile);
 
-/// Reads and validates a profile file.
-[[nodiscard]] Profile load_profile(const std::filesystem::path& path);
+/// A partial profile document laid over a profile before it is read: mappings merge key by key,
+/// any other value replaces the profile's. `source` names it in messages (a file, or
+/// "--set KEY=VALUE").
+struct ProfileOverlay {
+  std::string source;
+  std::string yaml;
+};
+/// The overlay of one `--set` assignment: a dotted key path and a YAML value
+/// ("exploration.view_range_m=3", "runtime.execution=background"). Throws kInvalidArgument for
+/// a malformed assignment.
+[[nodiscard]] ProfileOverlay set_overlay(std::string_view assignment);
+/// The overlay of a YAML file (`--config`). Throws kIo if it cannot be read.
+[[nodiscard]] ProfileOverlay file_overlay(const std::filesystem::path& path);
+
+/// Reads and validates a profile file, with overlays applied in order.
+[[nodiscard]] Profile load_profile(const std::filesystem::path& path, std::span<const ProfileOverlay> overlays = {});
 
 /// Parses and validates profile YAML text; `source_name` stands for the file in messages.
-[[nodiscard]] Profile parse_profile(std::string_view yaml_text, std::string_view source_name);
+[[nodiscard]] Profile parse_profile(std::string_view yaml_text, std::string_view source_name,
+                                    std::span<const ProfileOverlay> overlays = {});
+
+/// The whole effective settings tree as profile YAML, every key written (numbers in their
+/// shortest form that reads back exactly): parse_profile(to_yaml(p)) gives p again.
+[[nodiscard]] std::string to_yaml(const Profile& profile);
 
 /// A profile shipped with duet, compiled into the library (works without the source tree):
 /// "dual" / "dual_kinect_kobuki" or "single" / "single_kinect_kobuki".
@@ -174,7 +199,7 @@ struct Profile {
 
 /// A path (contains a '/', ends in .yaml / .yml, or names an existing file) is loaded with
 /// load_profile(); anything else is a built-in profile name.
-[[nodiscard]] Profile resolve_profile(std::string_view name_or_path);
+[[nodiscard]] Profile resolve_profile(std::string_view name_or_path, std::span<const ProfileOverlay> overlays = {});
 
 /// Checks the ranges and consistency of a profile built in code (load_profile does this);
 /// `source_name` prefixes the messages. Throws duet::Error(kInvalidArgument).

@@ -30,6 +30,7 @@
 /// kBackground, mapper(), explorer() and loop_closer() belong to the background task: read
 /// them only after drain(); state(), stop_status(), explorer_stats() and map_grid() are safe.
 #include <duet/runtime/config/profile.hpp>
+#include <duet/runtime/robot/runtime_settings.hpp>
 #include <duet/runtime/localization/loop_closure.hpp>
 #include <duet/runtime/localization/pose_corrector.hpp>
 #include <duet/runtime/mapping/mapper.hpp>
@@ -52,26 +53,7 @@ namespace duet {
 
 class BackgroundWorker;
 
-enum class Execution { kLockstep, kBackground };
-[[nodiscard]] const char* to_string(Execution e);
 
-struct RuntimeSettings {
-  double control_rate_hz = 20.0;   ///< control and pose rate [Hz] (paper §4.2), (0, 1000]
-  double map_rate_hz = 1.0;        ///< map update rate [Hz] (paper §4.2), (0, control_rate_hz]
-  /// The rate the sensors deliver frames at [Hz], (0, 1000]: sizes the synchronizer's
-  /// odometry queue and gives its inter-message lower bounds (0.9 / rate).
-  double sensor_rate_hz = 30.0;
-  Execution execution = Execution::kLockstep;  ///< see the file comment
-  int background_threads = 0;      ///< kBackground: threads of the background arena, [0, 256]; 0 = all cores
-  /// FAULT INJECTION (tests): in kBackground every decision takes at least this long [s], [0, 60].
-  double decision_delay_s = 0.0;
-  ExplorerSettings explorer;
-  ApproximateTimeSettings sync;    ///< queue_size raised to hold two sensor periods of odometry
-  PoseCorrectionSettings pose_correction;
-  /// Submaps, loop search and pose-graph optimisation (loop_closure.hpp); needs the pose correction.
-  LoopClosureSettings loop_closure;
-};
-void validate(const RuntimeSettings& s);
 
 struct RuntimeStats {
   std::size_t sets_integrated = 0;       ///< synchronized sets the mapper integrated
@@ -105,7 +87,10 @@ class ExplorationRuntime {
   /// runtime. Throws duet::Error(kInvalidArgument) for a sensor count that does not match the
   /// profile or invalid settings.
   ExplorationRuntime(const Profile& profile, ChassisInterface& chassis, std::span<RgbdSensorInterface* const> sensors,
-                     const RuntimeSettings& settings = {});
+                     const RuntimeSettings& settings);
+  /// ... with the profile's runtime settings (Profile::runtime).
+  ExplorationRuntime(const Profile& profile, ChassisInterface& chassis, std::span<RgbdSensorInterface* const> sensors)
+      : ExplorationRuntime(profile, chassis, sensors, profile.runtime) {}
   ~ExplorationRuntime();
   ExplorationRuntime(const ExplorationRuntime&) = delete;
   ExplorationRuntime& operator=(const ExplorationRuntime&) = delete;

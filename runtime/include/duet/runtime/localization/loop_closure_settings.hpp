@@ -1,0 +1,49 @@
+#pragma once
+/// @file loop_closure_settings.hpp
+/// Settings of loop closure (loop_closure.hpp): submaps, the loop search, its verification and
+/// the pose graph. YAML: localization.loop_closure (config/profile.hpp).
+#include <duet/kernels/pose_graph.hpp>
+#include <duet/kernels/scan_match.hpp>
+
+#include <cstddef>
+
+namespace duet {
+
+/// The wide-window matcher of loop closure (defaults differ from the front end's).
+[[nodiscard]] inline ScanMatchSettings loop_match_defaults() {
+  return ScanMatchSettings{.linear_window_m = 1.5f, .angular_window_deg = 6.0f, .linear_step_m = 0.1f, .angular_step_deg = 1.0f,
+                           .sigma_m = 0.05f, .max_distance_m = 0.3f, .prior_sigma_m = 3.0f, .prior_sigma_deg = 20.0f,
+                           .min_points = 150, .min_score = 0.55f};
+}
+
+struct LoopClosureSettings {
+  bool enabled = true;               ///< false: no submaps, no loop search (the map is the front end's)
+  double submap_duration_s = 30.0;   ///< a submap closes after this long [s], (0, 3600]
+  float submap_travel_m = 5.0f;      ///< ... or after the robot drove this far in it [m], > 0
+  double check_period_s = 5.0;       ///< a loop search every this often [s], > 0
+  double query_window_s = 10.0;      ///< the query: obstacle points of the frames of the last this long [s], > 0
+  double min_age_s = 60.0;           ///< submaps closed at least this long ago form the old map [s], >= 0
+  float search_radius_m = 6.0f;      ///< old submaps whose extent comes this near the robot are searched [m], > 0
+  std::size_t max_query_points = 700;   ///< the query is thinned to at most this many points (one per cell first)
+  ScanMatchSettings match = loop_match_defaults();  ///< the wide-window matcher and its acceptance
+  float verify_hit_m = 0.10f;        ///< a matched query point this near an old wall is a hit [m], >= 0
+  float verify_free_m = 0.25f;       ///< ... one on old free floor farther than this from any wall a conflict [m], >= verify_hit_m
+  std::size_t min_hits = 100;        ///< a match needs at least this many hits ...
+  float max_conflict_ratio = 0.05f;  ///< ... and at most this many conflicts per hit, >= 0
+  float confirm_m = 0.15f;           ///< two consecutive matches confirm a loop when their offsets agree within this [m]
+  float confirm_deg = 1.5f;          ///< ... and this [deg]
+  float min_correction_m = 0.10f;    ///< optimise when a confirmed loop is off the graph by more than this [m]
+  float min_correction_deg = 1.0f;   ///< ... or this [deg]
+  float odom_sigma_xy_m = 0.02f;     ///< odometry edge std: this [m] ...
+  float odom_sigma_xy_per_m = 0.02f; ///< ... plus this per metre driven [m/m]
+  float odom_sigma_theta_deg = 0.2f; ///< odometry edge heading std: this [deg] ...
+  float odom_sigma_theta_per_m = 0.05f;  ///< ... plus this per metre driven [deg/m]
+  float loop_sigma_xy_m = 0.05f;     ///< loop edge std [m]
+  float loop_sigma_theta_deg = 0.5f; ///< loop edge heading std [deg]
+  double max_loop_chi2 = 30.0;       ///< a new loop edge still above this after optimisation is dropped
+  PoseGraphSettings graph;
+};
+/// Throws duet::Error(kInvalidArgument) naming the bad field.
+void validate(const LoopClosureSettings& s);
+
+}  // namespace duet

@@ -1,0 +1,136 @@
+// The settings tree (config/profile.hpp): every settings struct is reachable from the profile
+// YAML; to_yaml() writes the whole effective tree and it reads back to the same tree; every key
+// can be set by --set (set_overlay) and --config (file_overlay) and a bad value names the key,
+// the source and the allowed range.
+#include <duet/kernels/error.hpp>
+#include <duet/runtime/config/profile.hpp>
+
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include "runtime_test_util.hpp"
+
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+std::string error_of(const std::function<void()>& fn) {
+  try {
+    fn();
+  } catch (const duet::Error& e) {
+    return e.what();
+  }
+  return {};
+}
+
+/// Every leaf of a mapping tree (sequences are not walked: the sensors), as (dotted path, scalar).
+void leaves(const YAML::Node& n, const std::string& path, std::vector<std::pair<std::string, std::string>>& out) {
+  for (const auto& kv : n) {
+    const std::string p = path.empty() ? kv.first.Scalar() : path + "." + kv.first.Scalar();
+    if (kv.second.IsMap()) leaves(kv.second, p, out);
+    else if (kv.second.IsScalar()) out.emplace_back(p, kv.second.Scalar());
+  }
+}
+
+}  // namespace
+
+TEST(SettingsTree, BuiltinProfilesRoundTripThroughToYaml) {
+  for (const char* name : {"dual", "single"}) {
+    const duet::Profile p = duet::builtin_profile(name);
+    const std::string y = duet::to_yaml(p);
+    const duet::Profile q = duet::parse_profile(y, "written.yaml");
+    EXPECT_EQ(duet::to_yaml(q), y) << name;
+    // What the text cannot show directly: derived and runtime fields came back.
+    ASSERT_EQ(q.sensors.size(), p.sensors.size());
+    for (std::size_t i = 0; i < p.sensors.size(); ++i) {
+      EXPECT_EQ(q.sensors[i].fov_h_deg, p.sensors[i].fov_h_deg);
+      EXPECT_EQ(q.sensors[i].intrinsics.fx, p.sensors[i].intrinsics.fx);
+      EXPECT_TRUE(q.sensors[i].T_robot_optical().isApprox(p.sensors[i].T_robot_optical(), 0.0f));
+    }
+    EXPECT_EQ(q.exploration.dwa.robot_radius_m, p.exploration.dwa.robot_radius_m);
+    EXPECT_EQ(q.runtime.explorer.view_range_m, p.runtime.explorer.view_range_m);
+    EXPECT_EQ(q.runtime.loop_closure.match.linear_window_m, p.runtime.loop_closure.match.linear_window_m);
+    // Every section of the tree is there.
+    const YAML::Node root = YAML::Load(y);
+    for (const char* section : {"chassis", "sensors", "mapping", "exploration", "control", "localization", "runtime"})
+      EXPECT_TRUE(root[section]) << section;
+  }
+}
+
+// Each key of the written tree, set to its own value by --set, reads back to the same tree (the
+// readers accept every key the writer writes); set to a value out of every range, it is either
+// accepted or rejected with a message naming that key.
+TEST(SettingsTree, EveryKeyCanBeSetAndABadValueIsNamed) {
+  const duet::Profile p = duet::builtin_profile("dual");
+  const std::string y = duet::to_yaml(p);
+  std::vector<std::pair<std::string, std::string>> keys;
+  leaves(YAML::Load(y), "", keys);
+  ASSERT_GT(keys.size(), 150u);
+  std::size_t rejected = 0;
+  for (const auto& [key, value] : keys) {
+    if (key == "name" || key == "description") continue;
+    const std::vector<duet::ProfileOverlay> same = {duet::set_overlay(key + "=" + value)};
+    duet::Profile q;
+    ASSERT_NO_THROW(q = duet::resolve_profile("dual", same)) << key;
+    EXPECT_EQ(duet::to_yaml(q), y) << key;
+    for (const char* bad : {"-1e30", "nonsense"}) {
+      const std::string e = error_of([&] { (void)duet::resolve_profile("dual", std::vector{duet::set_overlay(key + "=" + bad)}); });
+      if (e.empty()) continue;
+      ++rejected;
+      EXPECT_NE(e.find("--set " + key + "=" + bad), std::string::npos) << e;  // the source
+      const std::string leaf = key.substr(key.rfind('.') + 1);
+      EXPECT_NE(e.find(leaf), std::string::npos) << e;  // the key
+    }
+  }
+  EXPECT_GT(rejected, keys.size());  // "nonsense" is no number, no name and (nearly) no string
+}
+
+TEST(SettingsTree, OverlaysSetRuntimeSettingsAndNameTheirSource) {
+  duet_test::TempDir dir;
+  const auto over = dir.path() / "over.yaml";
+  std::ofstream(over) << "runtime:\n  execution: background\n  control_rate_hz: 25\nexploration:\n  on_done: return_home\n"
+                         "localization:\n  loop_closure:\n    enabled: false\n";
+  const duet::Profile p = duet::resolve_profile("dual", std::vector{duet::file_overlay(over), duet::set_overlay("control.stall_timeout_s=2")});
+  EXPECT_EQ(p.runtime.execution, duet::Execution::kBackground);
+  EXPECT_EQ(p.runtime.control_rate_hz, 25.0);
+  EXPECT_EQ(p.runtime.explorer.on_done, duet::OnDone::kReturnHome);
+  EXPECT_FALSE(p.runtime.loop_closure.enabled);
+  EXPECT_EQ(p.runtime.explorer.stall_timeout_s, 2.0f);
+  EXPECT_EQ(p.mapping.voxel_filter.leaf_size_m, 0.05f);  // untouched keys keep the profile's values
+  // A later overlay wins.
+  EXPECT_EQ(duet::resolve_profile("dual", std::vector{duet::file_overlay(over), duet::set_overlay("runtime.execution=lockstep")})
+                .runtime.execution,
+            duet::Execution::kLockstep);
+  // A bad value in the file: the file, its line and column, the key, the range.
+  std::ofstream(over) << "control:\n  slow_clearance_m: 20\n";
+  std::string e = error_of([&] { (void)duet::resolve_profile("dual", std::vector{duet::file_overlay(over)}); });
+  EXPECT_NE(e.find("over.yaml:2:21: control.slow_clearance_m"), std::string::npos) << e;
+  EXPECT_NE(e.find("[0, 10]"), std::string::npos) << e;
+  // An unknown key: named, with a suggestion.
+  std::ofstream(over) << "runtime:\n  control_rate: 25\n";
+  e = error_of([&] { (void)duet::resolve_profile("dual", std::vector{duet::file_overlay(over)}); });
+  EXPECT_NE(e.find("runtime.control_rate"), std::string::npos) << e;
+  EXPECT_NE(e.find("did you mean 'control_rate_hz'"), std::string::npos) << e;
+  // A cross-field constraint: map rate above the control rate.
+  e = error_of([&] { (void)duet::resolve_profile("dual", std::vector{duet::set_overlay("runtime.map_rate_hz=50")}); });
+  EXPECT_NE(e.find("runtime.map_rate_hz"), std::string::npos) << e;
+  // Not an overlay, a missing file, malformed assignments.
+  std::ofstream(over) << "- 1\n- 2\n";
+  EXPECT_NE(error_of([&] { (void)duet::resolve_profile("dual", std::vector{duet::file_overlay(over)}); }).find("must be a mapping"),
+            std::string::npos);
+  EXPECT_THROW((void)duet::file_overlay(dir.path() / "none.yaml"), duet::Error);
+  for (const char* bad : {"noequals", "=3", "a..b=1"}) EXPECT_THROW((void)duet::set_overlay(bad), duet::Error) << bad;
+}
+
+// The profile written by to_yaml() of a profile with changed runtime settings keeps them.
+TEST(SettingsTree, ChangedSettingsSurviveTheRoundTrip) {
+  const duet::Profile p = duet::resolve_profile(
+      "single", std::vector{duet::set_overlay("exploration.frontier.selection=explore_lite"), duet::set_overlay("runtime.background_threads=1"),
+                            duet::set_overlay("localization.pose_correction.match.sigma_m=0.07")});
+  const duet::Profile q = duet::parse_profile(duet::to_yaml(p), "written.yaml");
+  EXPECT_EQ(q.exploration.strategy.frontier.selection, duet::FrontierSelection::kExploreLite);
+  EXPECT_EQ(q.runtime.background_threads, 1);
+  EXPECT_EQ(q.runtime.pose_correction.match.sigma_m, 0.07f);
+}
