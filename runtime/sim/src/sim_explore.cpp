@@ -174,6 +174,10 @@ bool SimExplore::step() {
   }
   t_ = t_end;
   if (chassis_.collisions() > collisions_before) collision_log_.push_back({t_, chassis_.true_pose(), runtime_->last_command()});
+  // Paced by the wall clock, the robot's tick comes at its time: the world of the period (its
+  // motion, the frames stamped in it) was computed ahead, as sensors deliver frames on their
+  // own, so the control period is the runtime's and not the renderer's.
+  if (settings_.realtime) wall_.sleep_until(t_);
   // 3. The robot's runtime: synchronizer -> mapper -> explorer -> command.
   runtime_->override_pose(settings_.use_true_pose ? std::optional<Pose2>(chassis_.true_pose()) : std::nullopt);
   runtime_->tick(t_);
@@ -201,7 +205,6 @@ bool SimExplore::step() {
     const CurvePoint p = measure();
     if (curve_.empty() || curve_.back().t_s < t_) curve_.push_back(p);
   }
-  if (settings_.realtime) wall_.sleep_until(t_);
   wall_elapsed_ = wall_.now_s();
   return reason_ == StopReason::kRunning;
 }
