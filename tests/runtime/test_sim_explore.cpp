@@ -253,3 +253,32 @@ TEST(SimExplore, ReturnsHomeWhenDone) {
   EXPECT_EQ(st.stop_detail.find("home"), std::string::npos) << st.stop_detail;
   EXPECT_LT(st.sim_time_s, sum.sim_time_s);
 }
+
+// Each goal selection strategy alone explores the two rooms: the nearest frontier (Yamauchi) and
+// explore_lite's frontier cost without Procedure 1, and Procedure 1 with its frontier fallback.
+TEST(SimExplore, EachGoalStrategyAloneExploresTheRooms) {
+  struct Case {
+    const char* name;
+    bool simulation;
+    duet::FrontierSelection selection;
+  };
+  for (const Case c : {Case{"nearest_frontier", false, duet::FrontierSelection::kNearest},
+                       Case{"explore_lite", false, duet::FrontierSelection::kExploreLite},
+                       Case{"paper", true, duet::FrontierSelection::kNearest}}) {
+    duet::Profile p = duet::builtin_profile("dual_kinect_kobuki");
+    p.exploration.strategy.use_simulation = c.simulation;
+    p.exploration.strategy.frontier.selection = c.selection;
+    duet::sim::SimExplore run(two_rooms(), p, settings(2, 200.0));
+    run.run();
+    const auto s = run.summary();
+    EXPECT_GE(s.coverage, 0.95) << c.name;
+    EXPECT_EQ(s.collisions, 0u) << c.name;
+    EXPECT_EQ(s.stop_reason, duet::sim::StopReason::kExplorerDone) << c.name << ": " << s.stop_detail;
+    if (c.simulation) {
+      EXPECT_GT(s.explorer.simulated_goals, 0) << c.name;
+    } else {
+      EXPECT_EQ(s.explorer.simulated_goals, 0) << c.name;
+      EXPECT_GT(s.explorer.frontier_goals, 0) << c.name;
+    }
+  }
+}
