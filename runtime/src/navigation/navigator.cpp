@@ -33,14 +33,9 @@ bool same_geometry(const GridView& a, const GridView& b) {
 
 NavPlanView NavSnapshot::view() const {
   NavPlanView v;
-  v.state = state;
-  v.have_map = have_map;
-  v.wait_for_map = wait_for_map;
-  v.goal_id = goal_id;
+  static_cast<NavPlanState&>(v) = *this;
   v.goal = goal ? &*goal : nullptr;
   v.path = path;
-  v.deadline_s = deadline_s;
-  v.dwa = dwa;
   v.local = &local;
   v.planning = &planning;
   return v;
@@ -55,16 +50,22 @@ Navigator::Navigator(const Profile& profile, const ExplorerSettings& settings)
   validate(profile_.exploration.inflation);
 }
 
+NavPlanState Navigator::plan_state() const {
+  NavPlanState p;
+  p.state = state_;
+  p.have_map = have_map_;
+  p.wait_for_map = wait_for_map_;
+  p.goal_id = goal_id_;
+  p.deadline_s = goal_deadline_s_;
+  p.dwa = dwa_settings();
+  return p;
+}
+
 NavPlanView Navigator::view() const {
   NavPlanView v;
-  v.state = state_;
-  v.have_map = have_map_;
-  v.wait_for_map = wait_for_map_;
-  v.goal_id = goal_id_;
+  static_cast<NavPlanState&>(v) = plan_state();
   v.goal = goal_ ? &*goal_ : nullptr;
   v.path = path_;
-  v.deadline_s = goal_deadline_s_;
-  v.dwa = dwa_settings();
   v.local = &local_;
   v.planning = &planning_grid();
   return v;
@@ -72,16 +73,11 @@ NavPlanView Navigator::view() const {
 
 NavSnapshot Navigator::snapshot() const {
   NavSnapshot s;
-  s.state = state_;
+  static_cast<NavPlanState&>(s) = plan_state();
   s.stop_status = stop_status_;
   s.stop_detail = stop_detail_;
-  s.have_map = have_map_;
-  s.wait_for_map = wait_for_map_;
-  s.goal_id = goal_id_;
   s.goal = goal_;
   s.path = path_;
-  s.deadline_s = goal_deadline_s_;
-  s.dwa = dwa_settings();
   s.local = local_;
   s.planning = planning_grid();
   return s;

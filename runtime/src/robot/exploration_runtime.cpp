@@ -117,7 +117,6 @@ class ExplorationRuntime::Link final : public GoalLink {
   }
   /// A map update that started after the stall was posted has been taken: the navigator knows.
   void map_seen() { stall_pending_ = false; }
-  [[nodiscard]] bool stall_pending() const noexcept { return stall_pending_; }
 
  private:
   void post(const Event& e) {
@@ -185,7 +184,7 @@ RuntimeTiming ExplorationRuntime::timing() const {
   t.nominal_period_s = 1.0 / settings_.control_rate_hz;
   t.control_period = period_.summary();
   t.command_latency = command_.summary();
-  t.frame_to_map = (worker_ ? control_frame_to_map_ : frame_to_map_).summary();
+  t.frame_to_map = frame_to_map_.summary();
   t.decision = worker_ ? decision_latency_.summary() : explorer_.navigator().decide_latency().summary();
   t.late_periods = period_.count_above(1.1 * t.nominal_period_s);
   t.missed_periods = period_.count_above(2.0 * t.nominal_period_s);
@@ -376,7 +375,7 @@ void ExplorationRuntime::take_results() {
       stats_.scan_match_rejected = r.scan_match_rejected;
       stats_.scan_match_time_s = r.scan_match_time_s;
       grid_copy_ = std::move(r.grid);
-      control_frame_to_map_.add(r.frame_to_map_s);
+      frame_to_map_.add(r.frame_to_map_s);
       link_->map_seen();
       for (std::size_t i = 0; i < r.images.size() && i < sensors_.size(); ++i) sensors_[i]->recycle(std::move(r.images[i]));
     } else {

@@ -12,9 +12,8 @@ namespace duet {
 struct PoseCorrectionSettings {
   bool enabled = true;          ///< false: the pose is the raw wheel odometry
   ScanMatchSettings match;      ///< the matcher (window, steps, field, prior, acceptance)
-  /// Fraction of an accepted match's offset from the prior that is applied, (0, 1]. One match
-  /// is good to ~0.4 deg / 3 cm (lab, 1 Hz frames, 0.05 m cells) while the gyro drifts
-  /// 0.005 deg/s: a small gain averages the matches over ~1/gain updates and still tracks the
+  /// Fraction of an accepted match's offset from the prior that is applied, (0, 1]. One match is
+  /// noisier than the gyro's drift between updates: a small gain averages the matches over ~1/gain updates and still tracks the
   /// drift (a complementary filter of odometry and matcher).
   float gain = 0.1f;
   /// Gain of the heading-rate estimate, [0, 1]: the matches' heading offsets divided by the time
@@ -22,9 +21,8 @@ struct PoseCorrectionSettings {
   /// next update (an alpha-beta filter with alpha = gain), so a constant bias leaves no steady
   /// lag. 0 = no rate. This is the gain's floor: the n-th update uses
   /// max(rate_gain, 1 / (1 / rate_gain_initial + n)), a running mean at first (the rate is
-  /// unknown) that settles here. 0.002: on Willow (seed 1, gyro bias -0.0043 deg/s) a fixed 0.01
-  /// let the estimate wander by +-0.01 deg/s, twice the bias it tracks; 0.002 keeps it within
-  /// +-0.003 deg/s.
+  /// unknown) that settles here: small, so the estimate does not wander by more than the bias
+  /// it tracks (the measurement is in bench/RESULTS.md).
   float rate_gain = 0.002f;
   /// The rate gain of the first update, [rate_gain, 1] (see rate_gain): 0.02, worth a running
   /// mean over 50 updates.
@@ -36,10 +34,7 @@ struct PoseCorrectionSettings {
   /// is compared with what the previous ones added a second earlier, so in newly seen space the
   /// matches' small errors can add up; against an older map they are measured over a longer
   /// baseline, but where the scan sees mostly newer space the match is not confident and only
-  /// the odometry carries the pose. Measured: lab with a 7x gyro bias (200 s) 1.2 deg / 0.17 m
-  /// with 5 s against 2.7 deg / 0.21 m with 0; Willow seeds 1-3 (5400 s) 89.6 / 82.9 / 84.4 %
-  /// coverage with 5 s against 89.3 / 89.3 / 89.2 % with 0, both before view goals (see
-  /// bench/RESULTS.md).
+  /// the odometry carries the pose (bench/RESULTS.md: the default 0 explored Willow better).
   double reference_age_s = 0.0;
   float min_height_m = 0.15f;   ///< obstacle points from this height above the floor [m] (above the floor's noise)
   float max_height_m = 1.20f;   ///< ... up to this height [m] (the segmentation's obstacle band)

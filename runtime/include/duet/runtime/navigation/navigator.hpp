@@ -46,34 +46,32 @@
 
 namespace duet {
 
-/// What the controller follows: a read-only view of the navigator's goal and grids (valid
-/// until the navigator is next changed) or of a snapshot of them (NavSnapshot).
-struct NavPlanView {
+/// The plain values of a plan, shared by its view and its snapshot.
+struct NavPlanState {
   ExplorerState state = ExplorerState::kIdle;
   bool have_map = false;
   bool wait_for_map = false;          ///< the last decision found nothing: no new one before the next map
   std::uint64_t goal_id = 0;          ///< changes with every new goal (0: none yet)
-  const Pose2* goal = nullptr;        ///< nullptr: no goal
-  std::span<const Eigen::Vector2f> path;
   double deadline_s = 0.0;            ///< the goal's time limit (runtime clock)
   DwaSettings dwa;                    ///< the profile's, with the relaxed radius while a relaxed goal is active
+};
+
+/// What the controller follows: a read-only view of the navigator's goal and grids (valid
+/// until the navigator is next changed) or of a snapshot of them (NavSnapshot).
+struct NavPlanView : NavPlanState {
+  const Pose2* goal = nullptr;        ///< nullptr: no goal
+  std::span<const Eigen::Vector2f> path;
   const InflatedGrid* local = nullptr;     ///< the dynamic window's grid
   const InflatedGrid* planning = nullptr;  ///< the grid paths are planned on
   [[nodiscard]] bool has_goal() const noexcept { return goal != nullptr; }
 };
 
 /// A copy of a NavPlanView that owns its data (handed from a background task to the control thread).
-struct NavSnapshot {
-  ExplorerState state = ExplorerState::kIdle;
+struct NavSnapshot : NavPlanState {
   ExplorationStatus stop_status = ExplorationStatus::kNoFrontier;
   std::string stop_detail;
-  bool have_map = false;
-  bool wait_for_map = false;
-  std::uint64_t goal_id = 0;
   std::optional<Pose2> goal;
   std::vector<Eigen::Vector2f> path;
-  double deadline_s = 0.0;
-  DwaSettings dwa;
   InflatedGrid local, planning;
   [[nodiscard]] NavPlanView view() const;
 };
@@ -105,6 +103,7 @@ class Navigator {
 
   [[nodiscard]] NavPlanView view() const;
   [[nodiscard]] NavSnapshot snapshot() const;
+  [[nodiscard]] NavPlanState plan_state() const;
 
   [[nodiscard]] ExplorerState state() const noexcept { return state_; }
   [[nodiscard]] ExplorationStatus stop_status() const noexcept { return stop_status_; }

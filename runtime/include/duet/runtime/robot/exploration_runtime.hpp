@@ -155,7 +155,6 @@ class ExplorationRuntime {
   PoseCorrector corrector_;
   ObstacleMemory memory_;
   std::optional<LoopCloser> loop_;
-  LatencyStats frame_to_map_;    ///< kLockstep only (kBackground: the control side's)
   // ---- the control thread
   ApproximateTimeCore sync_;
   std::unordered_map<std::uint64_t, RgbdImage> frames_;     ///< payloads waiting in the synchronizer, by id
@@ -172,7 +171,8 @@ class ExplorationRuntime {
   Twist last_cmd_;
   std::optional<Pose2> pose_override_;
   RuntimeStats stats_;
-  LatencyStats period_, command_, decision_latency_, control_frame_to_map_;
+  LatencyStats period_, command_, decision_latency_;
+  LatencyStats frame_to_map_;   ///< added by map_update() in kLockstep, by take_results() in kBackground
   double last_tick_wall_ = -1.0;
   // ---- kBackground: what the two sides exchange
   std::unique_ptr<Link> link_;
