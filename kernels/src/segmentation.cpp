@@ -17,8 +17,8 @@ void validate(const SegmentationSettings& s) {
   if (!std::isfinite(s.floor_height_threshold_m))
     fail(ErrorCode::kInvalidArgument, "SegmentationSettings.floor_height_threshold_m must be finite");
   if (!(s.min_height_m < s.max_height_m) || !std::isfinite(s.min_height_m) || !std::isfinite(s.max_height_m))
-    fail(ErrorCode::kInvalidArgument, "SegmentationSettings: min_height_m (" + std::to_string(s.min_height_m) +
-                                          ") must be < max_height_m (" + std::to_string(s.max_height_m) + "), both finite");
+    fail(ErrorCode::kInvalidArgument, "SegmentationSettings.max_height_m must be finite and greater than min_height_m (" +
+                                          std::to_string(s.min_height_m) + "), got " + std::to_string(s.max_height_m));
   validate(s.clustering);
 }
 

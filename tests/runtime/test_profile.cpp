@@ -224,20 +224,25 @@ TEST(ProfileErrors, OutOfRangeNamesFileKeyPathAndRange) {
     const duet::Error e = load_error(dir, dual_with("    leaf_size_m: 0.05", "    leaf_size_m: -1"));
     EXPECT_EQ(e.code(), duet::ErrorCode::kInvalidArgument);
     expect_contains(e.what(), "bad_profile.yaml:");
-    expect_contains(e.what(), "mapping.voxel_filter.leaf_size_m: must be in (0, 10] m, got -1");
+    expect_contains(e.what(), "mapping.voxel_filter.leaf_size_m: must be finite and > 0 m, got -1");
   }
   {
     const duet::Error e = load_error(dir, dual_with("      zyx_euler_deg: [-90.0, 0.0, 0.0]", "      zyx_euler_deg: [-900.0, 0.0, 0.0]"));
     EXPECT_EQ(e.code(), duet::ErrorCode::kInvalidArgument);
     expect_contains(e.what(), "sensors[1].extrinsics.zyx_euler_deg[0]: must be in [-360, 360] deg, got -900");
   }
-  {  // integer range checked before narrowing
+  {  // an integer's type range checked before narrowing
     const duet::Error e = load_error(dir, dual_with("    k: 10 ", "    k: 99999999999 "));
-    expect_contains(e.what(), "mapping.normals.k: must be in [3, 1000]");
+    expect_contains(e.what(), "mapping.normals.k: must be in [-2147483648, 2147483647], got 99999999999");
+  }
+  {  // the kernel's range (NormalSettings' validate(), the one place it is written)
+    const duet::Error e = load_error(dir, dual_with("    k: 10 ", "    k: 300 "));
+    expect_contains(e.what(), "bad_profile.yaml:");
+    expect_contains(e.what(), "mapping.normals.k: must be in [3, 256], got 300");
   }
   {  // inconsistent pair
     const duet::Error e = load_error(dir, dual_with("    max_height_m: 1.20", "    max_height_m: -0.5"));
-    expect_contains(e.what(), "mapping.segmentation.max_height_m: must be greater than min_height_m");
+    expect_contains(e.what(), "mapping.segmentation.max_height_m: must be finite and greater than min_height_m");
   }
   {
     const duet::Error e = load_error(dir, dual_with("      fov_h_deg: 57.0\n      fov_v_deg: 43.0\n    rate_hz: 30.0\n    min_depth_m: 0.5\n    max_depth_m: 5.0\n    depth_units_per_m: 1000.0\n    extrinsics:                 # Eq. (6), sensor 2",

@@ -11,6 +11,7 @@
 #include "runtime_test_util.hpp"
 
 #include <fstream>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -133,4 +134,48 @@ TEST(SettingsTree, ChangedSettingsSurviveTheRoundTrip) {
   EXPECT_EQ(q.exploration.strategy.frontier.selection, duet::FrontierSelection::kExploreLite);
   EXPECT_EQ(q.runtime.background_threads, 1);
   EXPECT_EQ(q.runtime.pose_correction.match.sigma_m, 0.07f);
+}
+
+// Range checks live in one place, each struct's validate(): for the mapping kernels' keys the
+// profile reports exactly what the kernel's validate() says (at the key, with the overlay named),
+// and accepts what the kernel accepts.
+TEST(SettingsTree, MappingRangesAreTheKernelsValidate) {
+  struct Case {
+    const char* key;
+    const char* value;
+    std::function<void(duet::MappingSettings&)> set;
+  };
+  const std::vector<Case> bad = {
+      {"mapping.voxel_filter.leaf_size_m", "-0.5", [](auto& m) { m.voxel_filter.leaf_size_m = -0.5f; }},
+      {"mapping.normals.k", "257", [](auto& m) { m.normals.k = 257; }},
+      {"mapping.normals.k", "2", [](auto& m) { m.normals.k = 2; }},
+      {"mapping.back_projection.pixel_step", "65", [](auto& m) { m.back_projection.pixel_step = 65; }},
+      {"mapping.segmentation.max_floor_tilt_deg", "91", [](auto& m) { m.segmentation.max_floor_tilt_deg = 91.0f; }},
+      {"mapping.segmentation.clustering.tolerance_m", "0", [](auto& m) { m.segmentation.clustering.tolerance_m = 0.0f; }},
+      {"mapping.grid_update.hit_logodds", "-1", [](auto& m) { m.grid_update.hit_logodds = -1.0f; }},
+      {"mapping.grid_update.grow_margin_cells", "100001", [](auto& m) { m.grid_update.grow_margin_cells = 100001; }},
+      {"mapping.grid_resolution_m", "0", [](auto& m) { m.grid_resolution_m = 0.0f; }},
+  };
+  const duet::Profile dual = duet::builtin_profile("dual");
+  for (const Case& c : bad) {
+    SCOPED_TRACE(c.key);
+    duet::MappingSettings m = dual.mapping;
+    c.set(m);
+    const std::string kernel = error_of([&] { duet::validate(m); });
+    ASSERT_FALSE(kernel.empty()) << "the struct's validate() accepts the bad value";
+    const std::string assignment = std::string(c.key) + "=" + c.value;
+    const std::vector<duet::ProfileOverlay> overlays = {duet::set_overlay(assignment)};
+    const std::string msg = error_of([&] { (void)duet::resolve_profile("dual", overlays); });
+    ASSERT_FALSE(msg.empty()) << "the profile accepts what the kernel rejects";
+    EXPECT_NE(msg.find("--set " + assignment), std::string::npos) << msg;
+    EXPECT_NE(msg.find(std::string(c.key) + ": "), std::string::npos) << msg;
+    // The kernel's words after "Struct.field " are the profile's words after the key.
+    const std::string words = kernel.substr(kernel.find(' ') + 1);
+    EXPECT_NE(msg.find(std::string(c.key) + ": " + words), std::string::npos) << msg << "\nkernel: " << kernel;
+  }
+  // The kernels' bounds, not a second table: the edges they accept load.
+  for (const char* ok : {"mapping.normals.k=256", "mapping.back_projection.pixel_step=64", "mapping.voxel_filter.leaf_size_m=20"}) {
+    const std::vector<duet::ProfileOverlay> overlays = {duet::set_overlay(ok)};
+    EXPECT_EQ(error_of([&] { (void)duet::resolve_profile("dual", overlays); }), "") << ok;
+  }
 }

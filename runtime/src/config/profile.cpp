@@ -1,11 +1,14 @@
 /// @file profile.cpp
 /// Profile YAML -> settings structs (DESIGN.md §5). Reading is strict: every map lists its
 /// allowed keys up front (unknown and duplicate keys are errors), every scalar is parsed by
-/// hand so that "0.05" (quoted), "yes" or "1.5" for an integer are type errors, and every value
-/// is range-checked in validate_impl() with the file:line:column of the key it came from.
+/// hand so that "0.05" (quoted), "yes" or "1.5" for an integer are type errors; the sections of
+/// settings structs are read through their field lists (settings_fields.hpp), and every value is
+/// range-checked by its struct's validate() (profile_validate.cpp) with the file:line:column of
+/// the key it came from.
 #include <duet/kernels/error.hpp>
 #include <duet/runtime/config/profile.hpp>
 
+#include "config/profile_ranges.hpp"
 #include "config/settings_yaml.hpp"
 #include "config/yaml_reader.hpp"
 
@@ -46,224 +49,9 @@ using detail::MapReader;
 using detail::Range;
 using detail::node_kind;
 using detail::Reader;
+using namespace detail::ranges;
 
 constexpr double kDegToRad = 0.017453292519943295;
-
-// ---------------------------------------------------------------------------------------------
-// Ranges: one table used by the parser (integers, before narrowing) and by validate_impl().
-
-constexpr Range kRadius{0.0, 5.0, true, false, "m"};
-constexpr Range kFootprint{0.0, 10.0, true, false, "m"};
-constexpr Range kWheelBase{0.0, 5.0, true, false, "m"};
-constexpr Range kWheelDiameter{0.0, 2.0, true, false, "m"};
-constexpr Range kLinearSpeed{0.0, 10.0, true, false, "m/s"};
-constexpr Range kAngularSpeed{0.0, 3600.0, true, false, "deg/s"};
-constexpr Range kRateHz{0.0, 1000.0, true, false, "Hz"};
-constexpr Range kImageSize{1.0, 16384.0, false, false, "px"};
-constexpr Range kFocal{0.0, 1e6, true, false, "px"};
-constexpr Range kFov{0.0, 180.0, true, true, "deg"};
-constexpr Range kMinDepth{0.0, 100.0, false, true, "m"};
-constexpr Range kMaxDepth{0.0, 100.0, true, false, "m"};
-constexpr Range kDepthUnits{0.0, 1e6, true, false, "units/m"};
-constexpr Range kOffset{-10.0, 10.0, false, false, "m"};
-constexpr Range kRaysPerSensor{1.0, 10000.0, false, false, ""};
-constexpr Range kAnyInt{-2147483648.0, 2147483647.0, false, false, ""};
-constexpr Range kSeed{0.0, 9007199254740992.0, false, false, ""};
-constexpr Range kEuler{-360.0, 360.0, false, false, "deg"};
-constexpr Range kPixelStep{1.0, 64.0, false, false, ""};
-constexpr Range kLeaf{0.0, 10.0, true, false, "m"};
-constexpr Range kMinPointsPerVoxel{1.0, 4294967295.0, false, false, "points"};
-constexpr Range kNormalK{3.0, 1000.0, false, false, "neighbours"};
-constexpr Range kViewpoint{-1e6, 1e6, false, false, "m"};
-constexpr Range kFloorZ{-100.0, 100.0, false, false, "m"};
-constexpr Range kTilt{0.0, 90.0, false, false, "deg"};
-constexpr Range kFloorHeight{0.0, 10.0, false, false, "m"};
-constexpr Range kHeightBand{-100.0, 100.0, false, false, "m"};
-constexpr Range kTolerance{0.0, 10.0, true, false, "m"};
-constexpr Range kClusterSize{0.0, 4294967295.0, false, false, "points"};
-constexpr Range kHitLogodds{0.0, 20.0, true, false, ""};
-constexpr Range kMissLogodds{-20.0, 0.0, false, true, ""};
-constexpr Range kMinLogodds{-100.0, 0.0, false, true, ""};
-constexpr Range kMaxLogodds{0.0, 100.0, true, false, ""};
-constexpr Range kRayLength{0.0, 1000.0, true, false, "m"};
-constexpr Range kGrowMargin{0.0, 100000.0, false, false, "cells"};
-constexpr Range kGridResolution{0.0, 10.0, true, false, "m"};
-constexpr int kMaxSensors = 16;
-
-// ---------------------------------------------------------------------------------------------
-// Validation (shared by parse_profile and validate(Profile)).
-
-class Checker {
- public:
-  explicit Checker(const Locator& loc) : loc_(loc) {}
-
-  [[noreturn]] void fail_at(const std::string& path, const std::string& msg) const {
-    fail(ErrorCode::kInvalidArgument, loc_.where(path) + ": " + path + ": " + msg);
-  }
-  void range(const std::string& path, double v, const Range& r) const {
-    if (!in_range(v, r)) fail_at(path, "must be in " + describe(r) + ", got " + format_number(v));
-  }
-  /// Runs a kernel's validate(); its message names the field ("Struct.field" or
-  /// "Struct::field"), so the error points at that key where it was read (file, overlay).
-  template <class F>
-  void kernel(const std::string& path, F&& f) const {
-    try {
-      f();
-    } catch (const Error& e) {
-      // The keys of this section the message names; of those, one an overlay set (the value
-      // just changed is the likelier culprit of a cross-field constraint), else the first.
-      const std::string msg = e.what();
-      static const std::regex word(R"([a-z][a-z_0-9]*)");
-      std::string at = path;
-      bool from_overlay = false;
-      for (auto it = std::sregex_iterator(msg.begin(), msg.end(), word); it != std::sregex_iterator(); ++it) {
-        const std::string key = path + "." + it->str();
-        if (!loc_.has(key)) continue;
-        if (at == path) at = key;
-        if (!from_overlay && loc_.from_overlay(key)) {
-          at = key;
-          from_overlay = true;
-        }
-      }
-      fail_at(at, "rejected by the kernel: " + msg);
-    }
-  }
-
- private:
-  const Locator& loc_;
-};
-
-void validate_impl(const Profile& p, const Locator& loc) {
-  const Checker c(loc);
-  if (p.name.empty()) c.fail_at("name", "must be a non-empty string");
-
-  const ChassisProfile& ch = p.chassis;
-  if (ch.type != "differential")
-    c.fail_at("chassis.type", "must be one of: differential; got '" + ch.type + "'");
-  c.range("chassis.radius_m", ch.radius_m, kRadius);
-  c.range("chassis.footprint_diameter_m", ch.footprint_diameter_m, kFootprint);
-  c.range("chassis.wheel_base_m", ch.wheel_base_m, kWheelBase);
-  c.range("chassis.wheel_diameter_m", ch.wheel_diameter_m, kWheelDiameter);
-  c.range("chassis.max_linear_speed_mps", ch.max_linear_speed_mps, kLinearSpeed);
-  c.range("chassis.max_angular_speed_dps", ch.max_angular_speed_dps, kAngularSpeed);
-  c.range("chassis.odometry_rate_hz", ch.odometry_rate_hz, kRateHz);
-
-  if (p.sensors.empty() || p.sensors.size() > static_cast<std::size_t>(kMaxSensors))
-    c.fail_at("sensors", "must hold 1 to " + std::to_string(kMaxSensors) + " sensors, got " +
-                             std::to_string(p.sensors.size()));
-  std::unordered_set<std::string> names;
-  for (std::size_t i = 0; i < p.sensors.size(); ++i) {
-    const SensorProfile& s = p.sensors[i];
-    const std::string sp = "sensors[" + std::to_string(i) + "]";
-    if (s.name.empty()) c.fail_at(sp + ".name", "must be a non-empty string");
-    if (!names.insert(s.name).second)
-      c.fail_at(sp + ".name", "'" + s.name + "' is already the name of another sensor; names must be unique");
-    const PinholeIntrinsics& k = s.intrinsics;
-    c.range(sp + ".intrinsics.width", k.width, kImageSize);
-    c.range(sp + ".intrinsics.height", k.height, kImageSize);
-    c.range(sp + ".intrinsics.fx", k.fx, kFocal);
-    c.range(sp + ".intrinsics.fy", k.fy, kFocal);
-    c.range(sp + ".intrinsics.cx", k.cx, Range{0.0, static_cast<double>(k.width), false, false, "px (0 to width)"});
-    c.range(sp + ".intrinsics.cy", k.cy, Range{0.0, static_cast<double>(k.height), false, false, "px (0 to height)"});
-    c.range(sp + ".intrinsics.fov_h_deg", s.fov_h_deg, kFov);
-    c.range(sp + ".intrinsics.fov_v_deg", s.fov_v_deg, kFov);
-    c.range(sp + ".rate_hz", s.rate_hz, kRateHz);
-    c.range(sp + ".min_depth_m", s.min_depth_m, kMinDepth);
-    c.range(sp + ".max_depth_m", s.max_depth_m, kMaxDepth);
-    if (!(s.max_depth_m > s.min_depth_m))
-      c.fail_at(sp + ".max_depth_m", "must be greater than min_depth_m (" + format_number(s.min_depth_m) +
-                                         " m), got " + format_number(s.max_depth_m));
-    c.range(sp + ".depth_units_per_m", s.depth_units_per_m, kDepthUnits);
-    for (int a = 0; a < 3; ++a) {
-      const std::string idx = '[' + std::to_string(a) + ']';
-      c.range(sp + ".extrinsics.xyz_m" + idx, s.extrinsics.xyz_m[a], kOffset);
-      c.range(sp + ".extrinsics.zyx_euler_deg" + idx, s.extrinsics.zyx_euler_deg[a], kEuler);
-    }
-  }
-
-  const MappingSettings& m = p.mapping;
-  const BackProjectionSettings& bp = m.back_projection;
-  c.range("mapping.back_projection.min_depth_m", bp.min_depth_m, kMinDepth);
-  c.range("mapping.back_projection.max_depth_m", bp.max_depth_m, kMaxDepth);
-  if (!(bp.max_depth_m > bp.min_depth_m))
-    c.fail_at("mapping.back_projection.max_depth_m",
-              "must be greater than min_depth_m (" + format_number(bp.min_depth_m) + " m), got " +
-                  format_number(bp.max_depth_m));
-  c.range("mapping.back_projection.pixel_step", bp.pixel_step, kPixelStep);
-
-  c.range("mapping.voxel_filter.leaf_size_m", m.voxel_filter.leaf_size_m, kLeaf);
-  c.range("mapping.voxel_filter.min_points_per_voxel", m.voxel_filter.min_points_per_voxel, kMinPointsPerVoxel);
-
-  c.range("mapping.normals.k", m.normals.k, kNormalK);
-  for (int a = 0; a < 3; ++a)
-    c.range("mapping.normals.viewpoint_m" + ('[' + std::to_string(a) + ']'), m.normals.viewpoint[a], kViewpoint);
-
-  const SegmentationSettings& sg = m.segmentation;
-  c.range("mapping.segmentation.floor_z_m", sg.floor_z_m, kFloorZ);
-  c.range("mapping.segmentation.max_floor_tilt_deg", sg.max_floor_tilt_deg, kTilt);
-  c.range("mapping.segmentation.floor_height_threshold_m", sg.floor_height_threshold_m, kFloorHeight);
-  c.range("mapping.segmentation.min_height_m", sg.min_height_m, kHeightBand);
-  c.range("mapping.segmentation.max_height_m", sg.max_height_m, kHeightBand);
-  if (!(sg.max_height_m > sg.min_height_m))
-    c.fail_at("mapping.segmentation.max_height_m",
-              "must be greater than min_height_m (" + format_number(sg.min_height_m) + " m), got " +
-                  format_number(sg.max_height_m));
-  c.range("mapping.segmentation.clustering.tolerance_m", sg.clustering.tolerance_m, kTolerance);
-  c.range("mapping.segmentation.clustering.min_size", sg.clustering.min_size, kClusterSize);
-  c.range("mapping.segmentation.clustering.max_size", sg.clustering.max_size, kClusterSize);
-  if (sg.clustering.max_size < sg.clustering.min_size)
-    c.fail_at("mapping.segmentation.clustering.max_size",
-              "must be >= min_size (" + std::to_string(sg.clustering.min_size) + "), got " +
-                  std::to_string(sg.clustering.max_size));
-
-  const GridUpdateSettings& gu = m.grid_update;
-  c.range("mapping.grid_update.hit_logodds", gu.hit_logodds, kHitLogodds);
-  c.range("mapping.grid_update.miss_logodds", gu.miss_logodds, kMissLogodds);
-  c.range("mapping.grid_update.min_logodds", gu.min_logodds, kMinLogodds);
-  c.range("mapping.grid_update.max_logodds", gu.max_logodds, kMaxLogodds);
-  c.range("mapping.grid_update.max_ray_length_m", gu.max_ray_length_m, kRayLength);
-  if (!std::isinf(gu.clear_max_height_m)) c.range("mapping.grid_update.clear_max_height_m", gu.clear_max_height_m, kHeightBand);
-  c.range("mapping.grid_update.grow_margin_cells", gu.grow_margin_cells, kGrowMargin);
-  c.range("mapping.grid_resolution_m", m.grid_resolution_m, kGridResolution);
-
-  const ExplorationProfile& ex = p.exploration;
-  c.range("exploration.rays_per_sensor", ex.rays_per_sensor, kRaysPerSensor);
-  if (ex.inflation.robot_radius_m < ch.radius_m)
-    c.fail_at("exploration.inflation.robot_radius_m",
-              "must be at least chassis.radius_m (" + format_number(ch.radius_m) + " m), got " +
-                  format_number(ex.inflation.robot_radius_m));
-  if (ex.dwa.limits.max_v_mps > ch.max_linear_speed_mps)
-    c.fail_at("exploration.dwa.max_v_mps", "must not exceed chassis.max_linear_speed_mps (" +
-                                               format_number(ch.max_linear_speed_mps) + " m/s), got " +
-                                               format_number(ex.dwa.limits.max_v_mps));
-  if (ex.dwa.limits.max_omega_rps > ch.max_angular_speed_dps * kDegToRad * (1.0 + 1e-6))
-    c.fail_at("exploration.dwa.max_omega_rps", "must not exceed chassis.max_angular_speed_dps (" +
-                                                   format_number(ch.max_angular_speed_dps * kDegToRad) +
-                                                   " rad/s), got " + format_number(ex.dwa.limits.max_omega_rps));
-  if (ex.strategy.simulation.v_max_mps > ch.max_linear_speed_mps)
-    c.fail_at("exploration.simulation.v_max_mps", "must not exceed chassis.max_linear_speed_mps (" +
-                                                      format_number(ch.max_linear_speed_mps) + " m/s), got " +
-                                                      format_number(ex.strategy.simulation.v_max_mps));
-
-  // The kernels' own checks (defence in depth: a kernel may know a constraint we do not).
-  c.kernel("exploration.cells", [&] { validate(ex.cells); });
-  c.kernel("exploration.observation", [&] { validate(ex.observation); });
-  c.kernel("exploration.inflation", [&] { validate(ex.inflation); });
-  c.kernel("exploration.path", [&] { validate(ex.path); });
-  c.kernel("exploration.frontier", [&] { validate(ex.strategy.frontier); });
-  c.kernel("exploration.simulation", [&] { validate(ex.strategy.simulation); });
-  c.kernel("exploration", [&] { validate(ex.strategy); });
-  c.kernel("runtime", [&] { validate(p.runtime); });
-  c.kernel("exploration.dwa", [&] {
-    validate(ex.dwa.limits);
-    validate(ex.dwa);
-  });
-  c.kernel("mapping.back_projection", [&] { validate(bp); });
-  c.kernel("mapping.voxel_filter", [&] { validate(m.voxel_filter); });
-  c.kernel("mapping.normals", [&] { validate(m.normals); });
-  c.kernel("mapping.segmentation", [&] { validate(sg); });
-  c.kernel("mapping.grid_update", [&] { validate(gu); });
-}
 
 // ---------------------------------------------------------------------------------------------
 // Reading the profile (strict YAML reading: yaml_reader.hpp).
@@ -339,61 +127,6 @@ SensorProfile read_sensor(Reader& r, const YAML::Node& n, const std::string& pat
   return s;
 }
 
-MappingSettings read_mapping(Reader& r, const YAML::Node& n) {
-  MappingSettings ms;
-  MapReader m(r, n, "mapping",
-              {"back_projection", "voxel_filter", "normals", "segmentation", "grid_update", "grid_resolution_m"});
-  if (const YAML::Node b = m.get("back_projection")) {
-    MapReader q(r, b, m.path_of("back_projection"), {"min_depth_m", "max_depth_m", "pixel_step"});
-    q.opt_real("min_depth_m", ms.back_projection.min_depth_m);
-    q.opt_real("max_depth_m", ms.back_projection.max_depth_m);
-    q.opt_int("pixel_step", ms.back_projection.pixel_step, kPixelStep);
-  }
-  if (const YAML::Node b = m.get("voxel_filter")) {
-    MapReader q(r, b, m.path_of("voxel_filter"), {"leaf_size_m", "min_points_per_voxel"});
-    q.opt_real("leaf_size_m", ms.voxel_filter.leaf_size_m);
-    q.opt_int("min_points_per_voxel", ms.voxel_filter.min_points_per_voxel, kMinPointsPerVoxel);
-  }
-  if (const YAML::Node b = m.get("normals")) {
-    MapReader q(r, b, m.path_of("normals"), {"k", "viewpoint_m"});
-    q.opt_int("k", ms.normals.k, kNormalK);
-    q.opt_vec3("viewpoint_m", ms.normals.viewpoint, "[x, y, z] in m");
-  }
-  if (const YAML::Node b = m.get("segmentation")) {
-    SegmentationSettings& sg = ms.segmentation;
-    MapReader q(r, b, m.path_of("segmentation"),
-                {"floor_z_m", "max_floor_tilt_deg", "floor_height_threshold_m", "min_height_m", "max_height_m",
-                 "clustering"});
-    q.opt_real("floor_z_m", sg.floor_z_m);
-    q.opt_real("max_floor_tilt_deg", sg.max_floor_tilt_deg);
-    q.opt_real("floor_height_threshold_m", sg.floor_height_threshold_m);
-    q.opt_real("min_height_m", sg.min_height_m);
-    q.opt_real("max_height_m", sg.max_height_m);
-    if (const YAML::Node cl = q.get("clustering")) {
-      MapReader cq(r, cl, q.path_of("clustering"), {"tolerance_m", "min_size", "max_size"});
-      cq.opt_real("tolerance_m", sg.clustering.tolerance_m);
-      cq.opt_int("min_size", sg.clustering.min_size, kClusterSize);
-      cq.opt_int("max_size", sg.clustering.max_size, kClusterSize);
-    }
-  }
-  if (const YAML::Node b = m.get("grid_update")) {
-    GridUpdateSettings& gu = ms.grid_update;
-    MapReader q(r, b, m.path_of("grid_update"),
-                {"hit_logodds", "miss_logodds", "min_logodds", "max_logodds", "clear_along_rays", "clear_max_height_m",
-                 "max_ray_length_m", "grow_margin_cells"});
-    q.opt_real("hit_logodds", gu.hit_logodds);
-    q.opt_real("miss_logodds", gu.miss_logodds);
-    q.opt_real("min_logodds", gu.min_logodds);
-    q.opt_real("max_logodds", gu.max_logodds);
-    q.opt_bool("clear_along_rays", gu.clear_along_rays);
-    q.opt_real("clear_max_height_m", gu.clear_max_height_m);
-    q.opt_real("max_ray_length_m", gu.max_ray_length_m);
-    q.opt_int("grow_margin_cells", gu.grow_margin_cells, kGrowMargin);
-  }
-  m.opt_real("grid_resolution_m", ms.grid_resolution_m);
-  return ms;
-}
-
 ExplorationProfile read_exploration(Reader& r, const YAML::Node& n, const ChassisProfile& chassis) {
   ExplorationProfile ex;
   // Speed defaults never exceed the chassis (keys given explicitly are range-checked instead).
@@ -408,124 +141,8 @@ ExplorationProfile read_exploration(Reader& r, const YAML::Node& n, const Chassi
   std::vector<std::string_view> keys = {"rays_per_sensor", "cells",      "observation",  "inflation",     "path", "frontier",
                                         "simulation",      "eps_r_bits", "use_simulation", "dwa"};
   for (const std::string_view k : detail::exploration_goal_keys()) keys.push_back(k);  // the goal life cycle's (settings_yaml.cpp)
-  MapReader m(r, n, "exploration", std::move(keys));
-  m.opt_int("rays_per_sensor", ex.rays_per_sensor, kRaysPerSensor);
-  if (const YAML::Node b = m.get("cells")) {
-    MapReader q(r, b, m.path_of("cells"), {"occupied_logodds", "free_logodds"});
-    q.opt_real("occupied_logodds", ex.cells.occupied_logodds);
-    q.opt_real("free_logodds", ex.cells.free_logodds);
-  }
-  if (const YAML::Node b = m.get("observation")) {
-    MapReader q(r, b, m.path_of("observation"), {"backend", "tile_cells"});
-    std::string backend;
-    q.opt_string("backend", backend);
-    if (backend == "dda") ex.observation.backend = ObservationBackend::kDda;
-    else if (backend == "embree") ex.observation.backend = ObservationBackend::kEmbree;
-    else if (!backend.empty())
-      r.parse_error(q.get("backend"), q.path_of("backend"), "must be one of: dda, embree; got '" + backend + "'");
-    q.opt_int("tile_cells", ex.observation.tile_cells, kAnyInt);
-  }
-  if (const YAML::Node b = m.get("inflation")) {
-    MapReader q(r, b, m.path_of("inflation"), {"robot_radius_m", "unknown_is_obstacle", "uncertain_is_obstacle"});
-    q.opt_real("robot_radius_m", ex.inflation.robot_radius_m);
-    q.opt_bool("unknown_is_obstacle", ex.inflation.unknown_is_obstacle);
-    q.opt_bool("uncertain_is_obstacle", ex.inflation.uncertain_is_obstacle);
-  }
-  if (const YAML::Node b = m.get("path")) {
-    MapReader q(r, b, m.path_of("path"), {"allow_diagonal", "clearance_weight", "clearance_decay_m", "goal_tolerance_m"});
-    q.opt_bool("allow_diagonal", ex.path.allow_diagonal);
-    q.opt_real("clearance_weight", ex.path.clearance_weight);
-    q.opt_real("clearance_decay_m", ex.path.clearance_decay_m);
-    q.opt_real("goal_tolerance_m", ex.path.goal_tolerance_m);
-  }
-  if (const YAML::Node b = m.get("frontier")) {
-    FrontierSettings& f = ex.strategy.frontier;
-    MapReader q(r, b, m.path_of("frontier"), {"min_cluster_cells", "min_goal_distance_m", "blacklist_radius_m", "approach_radius_m",
-                                              "min_unknown_region_m2", "selection", "potential_scale", "gain_scale"});
-    q.opt_int("min_cluster_cells", f.min_cluster_cells, kAnyInt);
-    q.opt_real("min_goal_distance_m", f.min_goal_distance_m);
-    q.opt_real("blacklist_radius_m", f.blacklist_radius_m);
-    q.opt_real("approach_radius_m", f.approach_radius_m);
-    q.opt_real("min_unknown_region_m2", f.min_unknown_region_m2);
-    std::string selection = to_string(f.selection);
-    q.opt_string("selection", selection);
-    if (selection == "nearest") f.selection = FrontierSelection::kNearest;
-    else if (selection == "explore_lite") f.selection = FrontierSelection::kExploreLite;
-    else r.parse_error(q.get("selection"), q.path_of("selection"), "must be one of: nearest, explore_lite; got '" + selection + "'");
-    q.opt_real("potential_scale", f.potential_scale);
-    q.opt_real("gain_scale", f.gain_scale);
-  }
-  if (const YAML::Node b = m.get("simulation")) {
-    PartialSimSettings& ps = ex.strategy.simulation;
-    MapReader q(r, b, m.path_of("simulation"),
-                {"iterations", "particles", "phi_a", "phi_b", "stages", "stage_dt_s", "v_min_mps", "v_max_mps",
-                 "omega_max_rps", "sigma_v_mps", "sigma_omega_rps", "resample_ess_fraction", "gamma",
-                 "unknown_hit_probability", "hit_logodds", "miss_logodds", "ism_noise_logodds", "min_logodds",
-                 "max_logodds", "min_goal_distance_m", "max_goal_distance_m", "collision_step_m", "seed"});
-    q.opt_int("iterations", ps.iterations, kAnyInt);
-    q.opt_int("particles", ps.particles, kAnyInt);
-    q.opt_int("phi_a", ps.phi_a, kAnyInt);
-    q.opt_int("phi_b", ps.phi_b, kAnyInt);
-    q.opt_int("stages", ps.stages, kAnyInt);
-    q.opt_real("stage_dt_s", ps.stage_dt_s);
-    q.opt_real("v_min_mps", ps.v_min_mps);
-    q.opt_real("v_max_mps", ps.v_max_mps);
-    q.opt_real("omega_max_rps", ps.omega_max_rps);
-    q.opt_real("sigma_v_mps", ps.sigma_v_mps);
-    q.opt_real("sigma_omega_rps", ps.sigma_omega_rps);
-    q.opt_real("resample_ess_fraction", ps.resample_ess_fraction);
-    q.opt_real("gamma", ps.gamma);
-    q.opt_real("unknown_hit_probability", ps.unknown_hit_probability);
-    q.opt_real("hit_logodds", ps.hit_logodds);
-    q.opt_real("miss_logodds", ps.miss_logodds);
-    q.opt_real("ism_noise_logodds", ps.ism_noise_logodds);
-    q.opt_real("min_logodds", ps.min_logodds);
-    q.opt_real("max_logodds", ps.max_logodds);
-    q.opt_real("min_goal_distance_m", ps.min_goal_distance_m);
-    q.opt_real("max_goal_distance_m", ps.max_goal_distance_m);
-    q.opt_real("collision_step_m", ps.collision_step_m);
-    q.opt_int("seed", ps.seed, kSeed);
-  }
-  m.opt_real("eps_r_bits", ex.strategy.eps_r_bits);
-  m.opt_bool("use_simulation", ex.strategy.use_simulation);
-  if (const YAML::Node b = m.get("dwa")) {
-    DwaSettings& d = ex.dwa;
-    MapReader q(r, b, m.path_of("dwa"),
-                {"max_v_mps", "min_v_mps", "max_omega_rps", "max_accel_mps2", "max_alpha_rps2", "mapping_max_omega_rps",
-                 "mapping_max_alpha_rps2", "control_period_s", "v_samples", "omega_samples", "steps", "sim_time_s",
-                 "safety_margin_m", "w_progress", "w_path", "w_clearance", "w_speed", "clearance_cap_m", "lookahead_m",
-                 "goal_tolerance_m", "oscillation_window_calls", "oscillation_min_progress_m",
-                 "oscillation_min_turn_rad", "recovery_max_calls", "rotate_omega_rps", "rotate_tolerance_rad",
-                 "backoff_distance_m", "backoff_speed_mps"});
-    q.opt_real("max_v_mps", d.limits.max_v_mps);
-    q.opt_real("min_v_mps", d.limits.min_v_mps);
-    q.opt_real("max_omega_rps", d.limits.max_omega_rps);
-    q.opt_real("max_accel_mps2", d.limits.max_accel_mps2);
-    q.opt_real("max_alpha_rps2", d.limits.max_alpha_rps2);
-    q.opt_real("mapping_max_omega_rps", d.mapping_max_omega_rps);
-    q.opt_real("mapping_max_alpha_rps2", d.mapping_max_alpha_rps2);
-    q.opt_real("control_period_s", d.control_period_s);
-    q.opt_int("v_samples", d.v_samples, kAnyInt);
-    q.opt_int("omega_samples", d.omega_samples, kAnyInt);
-    q.opt_int("steps", d.steps, kAnyInt);
-    q.opt_real("sim_time_s", d.sim_time_s);
-    q.opt_real("safety_margin_m", d.safety_margin_m);
-    q.opt_real("w_progress", d.w_progress);
-    q.opt_real("w_path", d.w_path);
-    q.opt_real("w_clearance", d.w_clearance);
-    q.opt_real("w_speed", d.w_speed);
-    q.opt_real("clearance_cap_m", d.clearance_cap_m);
-    q.opt_real("lookahead_m", d.lookahead_m);
-    q.opt_real("goal_tolerance_m", d.goal_tolerance_m);
-    q.opt_int("oscillation_window_calls", d.oscillation_window_calls, kAnyInt);
-    q.opt_real("oscillation_min_progress_m", d.oscillation_min_progress_m);
-    q.opt_real("oscillation_min_turn_rad", d.oscillation_min_turn_rad);
-    q.opt_int("recovery_max_calls", d.recovery_max_calls, kAnyInt);
-    q.opt_real("rotate_omega_rps", d.rotate_omega_rps);
-    q.opt_real("rotate_tolerance_rad", d.rotate_tolerance_rad);
-    q.opt_real("backoff_distance_m", d.backoff_distance_m);
-    q.opt_real("backoff_speed_mps", d.backoff_speed_mps);
-  }
+  MapReader m(r, n, "exploration", std::move(keys));  // the section's keys; the fields through their list
+  detail::read_exploration_kernels(r, n, ex);
   // One source for what is shared: the thresholds, and the robot's radius.
   ex.observation.thresholds = ex.cells;
   ex.inflation.thresholds = ex.cells;
@@ -550,7 +167,7 @@ Profile parse_root(Reader& r, const YAML::Node& root, const std::string& source)
                   "expected a sequence of 1 to 16 sensors, got " + std::to_string(sensors.size()) + " elements");
   for (std::size_t i = 0; i < sensors.size(); ++i)
     p.sensors.push_back(read_sensor(r, sensors[i], "sensors[" + std::to_string(i) + "]"));
-  if (const YAML::Node mapping = m.get("mapping")) p.mapping = read_mapping(r, mapping);
+  if (const YAML::Node mapping = m.get("mapping")) p.mapping = detail::read_mapping(r, mapping);
   if (const YAML::Node ex = m.get("exploration")) {
     p.exploration = read_exploration(r, ex, p.chassis);
   } else {
@@ -611,7 +228,7 @@ Eigen::Isometry3f SensorProfile::T_robot_optical() const { return T_robot_body()
 
 void validate(const Profile& profile, std::string_view source_name) {
   const Locator loc{std::string(source_name)};
-  validate_impl(profile, loc);
+  detail::validate_profile(profile, loc);
 }
 
 Profile parse_profile(std::string_view yaml_text, std::string_view source_name, std::span<const ProfileOverlay> overlays) {
@@ -641,7 +258,7 @@ Profile parse_profile(std::string_view yaml_text, std::string_view source_name, 
   } catch (const YAML::Exception& e) {  // should not happen: the reader checks node types first
     fail(ErrorCode::kParse, loc.at(e.mark) + ": " + e.msg);
   }
-  validate_impl(p, loc);
+  detail::validate_profile(p, loc);
   return p;
 }
 

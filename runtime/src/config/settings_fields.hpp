@@ -7,8 +7,9 @@
 ///   v(key, field)                 a scalar: float, double, int, bool, sizes, strings, Vector3f
 ///   v.choice(key, field, names)   an enum by name ({{"a", E::kA}, ...})
 ///   v.section(key, fn)            a nested mapping; fn(v) visits its fields
-/// The reader of the older sections (chassis, sensors, mapping, exploration's kernels) is
-/// hand-written in profile.cpp with the same keys; the round-trip test checks they agree.
+/// `mapping` and the kernels' part of `exploration` are read through these lists too; only the
+/// chassis (required keys) and the sensors (focal lengths or fields of view) have hand-written
+/// readers in profile.cpp with the same keys, and the round-trip test checks they agree.
 #include <duet/runtime/config/profile.hpp>
 
 #include <cmath>
@@ -151,7 +152,7 @@ void localization_fields(V& v, RuntimeSettings& s) {
   v.section("loop_closure", [&](auto& w) { fields(w, s.loop_closure); });
 }
 
-// ---- the older sections (written through these lists; read by profile.cpp's readers)
+// ---- the robot's and the kernels' sections
 
 /// The sensor's focal lengths are what profile.cpp derives from its fields of view.
 inline bool fov_form(const SensorProfile& s) {

@@ -174,6 +174,16 @@ RuntimeSettings read_runtime_settings(Reader& r, const YAML::Node& root, Runtime
   return s;
 }
 
+MappingSettings read_mapping(Reader& r, const YAML::Node& node) {
+  MappingSettings m;
+  read_fields(r, node, "mapping", m, [](auto& v, MappingSettings& ms) { fields(v, ms); });
+  return m;
+}
+
+void read_exploration_kernels(Reader& r, const YAML::Node& node, ExplorationProfile& ex) {
+  read_fields(r, node, "exploration", ex, [](auto& v, ExplorationProfile& e) { fields(v, e); }, false);
+}
+
 void merge_overlay(YAML::Node base, const YAML::Node& overlay, Locator& loc, const std::string& source) {
   if (!overlay.IsMap()) fail(ErrorCode::kParse, loc.at(overlay) + ": an overlay must be a mapping of profile keys, got " + node_kind(overlay));
   for (const auto& kv : overlay) {

@@ -22,6 +22,17 @@ namespace duet::detail {
 /// naming the key (file:line:col) a struct's validate() rejects.
 [[nodiscard]] RuntimeSettings read_runtime_settings(Reader& r, const YAML::Node& root, RuntimeSettings base);
 
+/// Reads the `mapping` section through its field list (absent keys keep the defaults).
+[[nodiscard]] MappingSettings read_mapping(Reader& r, const YAML::Node& node);
+
+/// Reads the kernels' keys of the `exploration` section into `ex` (absent keys keep its values);
+/// the caller checks the section's keys (the goal life cycle's keys share it).
+void read_exploration_kernels(Reader& r, const YAML::Node& node, ExplorationProfile& ex);
+
+/// Every struct's validate() and the constraints between sections; errors name the key with
+/// the file:line:column `loc` recorded for it (profile_validate.cpp).
+void validate_profile(const Profile& p, const Locator& loc);
+
 /// Merges an overlay document into `base` (mappings key by key, anything else replaced);
 /// the overlay's nodes are located in `source`. Throws kParse if the overlay is not a mapping.
 void merge_overlay(YAML::Node base, const YAML::Node& overlay, Locator& loc, const std::string& source);

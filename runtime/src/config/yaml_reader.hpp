@@ -36,6 +36,7 @@ struct Range {
 inline std::string format_number(double v) {
   if (std::isnan(v)) return "nan";
   if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  if (v == std::floor(v) && std::fabs(v) < 1e15) return std::to_string(static_cast<long long>(v));  // integers exactly
   std::ostringstream os;
   os.imbue(std::locale::classic());
   os.precision(9);

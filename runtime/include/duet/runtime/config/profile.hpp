@@ -201,6 +201,12 @@ struct ProfileOverlay {
 /// load_profile(); anything else is a built-in profile name.
 [[nodiscard]] Profile resolve_profile(std::string_view name_or_path, std::span<const ProfileOverlay> overlays = {});
 
+/// Range checks of the profile's structs (the kernels' settings have their own validate()):
+/// each throws duet::Error(kInvalidArgument) "Struct.field must be in RANGE, got V".
+void validate(const ChassisProfile& chassis);
+void validate(const SensorProfile& sensor);
+void validate(const MappingSettings& mapping);  ///< the five kernels' validate() and grid_resolution_m
+
 /// Checks the ranges and consistency of a profile built in code (load_profile does this);
 /// `source_name` prefixes the messages. Throws duet::Error(kInvalidArgument).
 void validate(const Profile& profile, std::string_view source_name = "profile");
