@@ -6,7 +6,8 @@
 // 300 s; when ../shared/data is there). Each iteration takes the next state round-robin; the
 // navigator's costmaps for it (update_map) are built outside the timing, as the runtime builds
 // them at every map update before a decision. Items = decisions; the "goal" counter is the
-// fraction of decisions that gave a goal.
+// fraction of decisions that gave a goal; p50_ms, p99_ms and max_ms are the spread of single
+// decisions' wall times over the states.
 #include "bench_util.hpp"
 
 #include <duet/runtime/config/profile.hpp>
@@ -14,6 +15,8 @@
 #include <duet/sim/sim_explore.hpp>
 #include <duet/sim/world.hpp>
 
+#include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -79,6 +82,7 @@ void register_decision_loop() {
           return;
         }
         std::size_t k = 0, goals = 0, decisions = 0;
+        std::vector<double> ms;  // each decision's wall time: its spread over the states
         for (auto _ : state) {
           state.PauseTiming();
           const LoopState& st = s->states[k++ % s->states.size()];
@@ -89,11 +93,20 @@ void register_decision_loop() {
             nav->update_map(st.grid, st.pose, st.t_s);
           });
           state.ResumeTiming();
+          const auto t0 = std::chrono::steady_clock::now();
           arena(impl.threads).execute([&] { nav->decide(st.pose, st.t_s); });
+          ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
           ++decisions;
           goals += nav->goal().has_value();
         }
         report(state, 1, static_cast<double>(s->states.size()));
+        if (!ms.empty()) {
+          std::sort(ms.begin(), ms.end());
+          auto at = [&](double q) { return ms[std::min(ms.size() - 1, static_cast<std::size_t>(q * static_cast<double>(ms.size())))]; };
+          state.counters["p50_ms"] = at(0.50);
+          state.counters["p99_ms"] = at(0.99);
+          state.counters["max_ms"] = ms.back();
+        }
         state.counters["goal"] = decisions ? static_cast<double>(goals) / static_cast<double>(decisions) : 0.0;
         state.SetLabel(std::string(world) + ": " + std::to_string(s->states.size()) + " states of a real run");
       })->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -42,7 +42,14 @@ NavPlanView NavSnapshot::view() const {
 }
 
 Navigator::Navigator(const Profile& profile, const ExplorerSettings& settings)
-    : profile_(profile), settings_(settings), sectors_(observation_sectors(profile)), model_(profile.exploration.observation) {
+    : Navigator(profile, settings, make_goal_strategies(profile, settings)) {}
+
+Navigator::Navigator(const Profile& profile, const ExplorerSettings& settings, std::vector<std::unique_ptr<GoalStrategy>> strategies)
+    : profile_(profile), settings_(settings), sectors_(observation_sectors(profile)), model_(profile.exploration.observation),
+      strategies_(std::move(strategies)) {
+  if (strategies_.empty()) fail(ErrorCode::kInvalidArgument, "Navigator: no goal strategy");
+  for (const auto& st : strategies_)
+    if (!st) fail(ErrorCode::kInvalidArgument, "Navigator: a goal strategy is null");
   validate(settings_);
   validate(profile_.exploration.strategy);
   validate(profile_.exploration.dwa);
@@ -103,17 +110,7 @@ void Navigator::goal_reached(std::uint64_t goal_id, double now_s) {
     return;
   }
   ++stats_.goals_reached;
-  // A frontier that is still a frontier after the robot stood at it and looked at it cannot
-  // be observed from there (the inside of an obstacle behind a gap in its outline): never again.
-  // For a goal on an approach cell the frontier cell it was for is the one looked at.
-  if (view_active_) {
-    viewed_.add(view_target_, now_s, std::numeric_limits<double>::infinity());
-    ++stats_.view_goals_reached;
-  } else if (decision_.status == ExplorationStatus::kFrontierGoal) {
-    blacklist_.add(goal_target_, now_s, std::numeric_limits<double>::infinity());
-    if (decision_.frontier.target_xy != goal_target_)
-      blacklist_.add(decision_.frontier.target_xy, now_s, std::numeric_limits<double>::infinity());
-  }
+  if (GoalStrategy* by = active()) by->goal_ended(GoalEnd{true, now_s, goal_target_, decision_, blacklist_, stats_});
   drop_goal();
 }
 
@@ -168,7 +165,7 @@ void Navigator::shift(const Pose2& D) {
   for (auto* v : {&trail_, &contacts_, &recent_, &path_})
     for (Eigen::Vector2f& p : *v) move(p);
   move(goal_target_);
-  move(view_target_);
+  for (const auto& st : strategies_) st->shift(D);
   if (goal_) goal_ = compose(D, *goal_);
 }
 
@@ -190,7 +187,7 @@ void Navigator::update_map(const OccupancyGrid& grid, const Pose2& robot, double
     map = &contact_grid_;
   }
   inflate(GridView(*map), profile_.exploration.inflation, inflated_);
-  if (relaxed_active_) build_relaxed();
+  for (std::size_t i = 0; i < strategies_.size(); ++i) strategies_[i]->map_updated(latest_map(), i == active_);
   // The dynamic window's grid: unknown is an obstacle, except where the robot's body has been;
   // the recent obstacles block (ExplorerSettings::recent_obstacles_s) - only here: where the
   // pose has moved since a place was mapped, the map's copy of a wall and the recent one narrow
@@ -232,98 +229,14 @@ void Navigator::update_map(const OccupancyGrid& grid, const Pose2& robot, double
   }
 }
 
-void Navigator::build_relaxed() {
-  InflationSettings relaxed = profile_.exploration.inflation;
-  if (relaxed_boxed_in_) relaxed.uncertain_is_obstacle = false;
-  relaxed.robot_radius_m = relaxed_radius();
-  // The latest map (the model holds its log-odds), with the contacts if any.
-  inflate(marked_ ? GridView(contact_grid_) : model_.grid(), relaxed, relaxed_);
-}
+GridView Navigator::latest_map() const { return marked_ ? GridView(contact_grid_) : model_.grid(); }
 
-bool Navigator::try_relaxed(const Pose2& robot, double now_s) {
-  if (!have_map_ || !decision_.frontier_searched) return false;
-  if (decision_.status != ExplorationStatus::kAllUnreachable && decision_.status != ExplorationStatus::kRobotBlocked &&
-      decision_.status != ExplorationStatus::kAllBlacklisted)
-    return false;
-  // Boxed in: the search reached a small area from the robot (none if it is blocked).
-  const double cell_m2 = static_cast<double>(inflated_.resolution_m) * static_cast<double>(inflated_.resolution_m);
-  const bool boxed_in = static_cast<double>(decision_.frontier.reached_cells) * cell_m2 < static_cast<double>(settings_.boxed_in_area_m2);
-  const ExplorationSettings& s = profile_.exploration.strategy;
-  FrontierResult f;
-  bool found = false;
-  // First the squeezed radius alone, then (boxed in) with uncertain cells not blocking as well.
-  for (const bool level_boxed : {false, true}) {
-    if (level_boxed ? !boxed_in : !(settings_.squeeze_anywhere || boxed_in)) continue;
-    if (!level_boxed && !(relaxed_radius() < profile_.exploration.inflation.robot_radius_m)) continue;  // same grid
-    relaxed_boxed_in_ = level_boxed;
-    build_relaxed();
-    // From a large area only frontiers of large unknown regions (a room behind a door), not
-    // the pockets between furniture and clutter the robot would squeeze into.
-    FrontierSettings fs = s.frontier;
-    if (!boxed_in) fs.min_unknown_region_m2 = std::max(fs.min_unknown_region_m2, settings_.squeeze_min_unknown_m2);
-    f = find_frontier(relaxed_, Eigen::Vector2f(robot.x, robot.y), blacklist_, now_s, fs, ws_.frontier);
-    if (f.status == FrontierStatus::kFound) {
-      found = true;
-      break;
-    }
-  }
-  if (!found) return false;
-  decision_.status = ExplorationStatus::kFrontierGoal;
-  decision_.goal = frontier_goal_pose(f, robot);
-  decision_.frontier = std::move(f);
-  decision_.frontier_searched = true;
-  relaxed_active_ = true;
-  ++stats_.relaxed_goals;
-  stats_.boxed_in_goals += relaxed_boxed_in_;
-  return true;
-}
+GoalStrategy* Navigator::active() const { return active_ < strategies_.size() ? strategies_[active_].get() : nullptr; }
 
-std::optional<Pose2> Navigator::find_view(const Pose2& robot, double now_s) {
-  // A fresh search on the planning grid: the relaxed one (if it ran) left its own distances.
-  const FrontierSettings& fs = profile_.exploration.strategy.frontier;
-  const FrontierResult f = find_frontier(inflated_, Eigen::Vector2f(robot.x, robot.y), blacklist_, now_s, fs, view_ws_);
-  if (f.status != FrontierStatus::kAllUnreachable && f.status != FrontierStatus::kAllBlacklisted &&
-      f.status != FrontierStatus::kFound)
-    return std::nullopt;  // no frontier, or the robot blocked: the search's distances were not computed
-  const InflatedGrid& g = inflated_;
-  const GridView geometry = model_.grid();  // the latest map: the geometry of inflated_
-  const std::vector<std::uint8_t>& mask = view_ws_.mask;
-  const std::vector<float>& dist = view_ws_.dist;
-  const float rmin = settings_.view_min_range_m, rmax = settings_.view_range_m;
-  std::vector<Eigen::Vector2f> dirs(static_cast<std::size_t>(settings_.view_rays));
-  for (std::size_t r = 0; r < dirs.size(); ++r) {
-    const float a = 2.0f * std::numbers::pi_v<float> * static_cast<float>(r) / static_cast<float>(dirs.size());
-    dirs[r] = Eigen::Vector2f(std::cos(a), std::sin(a));
-  }
-  float best_len = std::numeric_limits<float>::infinity();
-  std::size_t best_cell = 0, best_target = 0;
-  const std::size_t n = g.cell_count();
-  for (std::size_t i = 0; i < n && i < mask.size(); ++i) {
-    if (mask[i] != 1) continue;  // frontier cells of kept clusters
-    // A frontier cell the robot can reach is the frontier search's business (too near, or
-    // blacklisted: it was stood at and looked at).
-    if (std::isfinite(dist[i])) continue;
-    const Eigen::Vector2f target = g.cell_center(i);
-    if (blacklist_.blocks(target, fs.blacklist_radius_m, now_s) || viewed_.blocks(target, fs.blacklist_radius_m, now_s)) continue;
-    for (const Eigen::Vector2f& dir : dirs) {
-      // Along the line of sight, through known-free cells only, the first cell the robot can
-      // stand on beyond the minimum range.
-      walk_cells(geometry, target, dir, 0.0f, rmax, [&](int ix, int iy, float t_enter, float) {
-        if (!g.in_bounds(ix, iy)) return false;
-        const std::size_t c = g.index(ix, iy);
-        if (g.state[c] != CellState::kFree) return false;
-        if (t_enter < rmin || !std::isfinite(dist[c]) || dist[c] >= best_len || !can_stand_on(ix, iy)) return true;
-        best_len = dist[c];
-        best_cell = c;
-        best_target = i;
-        return false;
-      });
-    }
-  }
-  if (!std::isfinite(best_len)) return std::nullopt;
-  const Eigen::Vector2f at = g.cell_center(best_cell), target = g.cell_center(best_target);
-  view_target_ = target;
-  return Pose2{at.x(), at.y(), std::atan2(target.y() - at.y(), target.x() - at.x())};
+const InflatedGrid& Navigator::planning_grid() const noexcept {
+  const GoalStrategy* by = active();
+  const InflatedGrid* own = by ? by->planning_grid() : nullptr;
+  return own ? *own : inflated_;
 }
 
 bool Navigator::plan(const Pose2& robot) {
@@ -335,13 +248,10 @@ bool Navigator::plan(const Pose2& robot) {
   return true;
 }
 
-float Navigator::relaxed_radius() const {
-  return std::min(profile_.exploration.inflation.robot_radius_m, profile_.chassis.radius_m + settings_.squeeze_margin_m);
-}
-
 DwaSettings Navigator::dwa_settings() const {
   DwaSettings ds = profile_.exploration.dwa;
-  if (relaxed_active_) ds.robot_radius_m = std::min(ds.robot_radius_m, relaxed_radius());
+  if (const GoalStrategy* by = active())
+    if (const std::optional<float> r = by->robot_radius_m()) ds.robot_radius_m = std::min(ds.robot_radius_m, *r);
   return ds;
 }
 
@@ -397,17 +307,14 @@ void Navigator::abandon_goal(int& counter, double now_s) {
     drop_goal();
     return;
   }
-  // A view goal's frontier cell is not looked for again (the robot could not get to where it is
-  // seen from); any other goal is blacklisted for a while.
-  if (goal_ && view_active_) viewed_.add(view_target_, now_s, std::numeric_limits<double>::infinity());
-  else if (goal_) blacklist_.add(goal_target_, now_s, settings_.blacklist_ttl_s);
+  // The strategy it came from decides what is not tried again (for a while, or for good).
+  if (GoalStrategy* by = goal_ ? active() : nullptr) by->goal_ended(GoalEnd{false, now_s, goal_target_, decision_, blacklist_, stats_});
   drop_goal();
 }
 
 void Navigator::drop_goal() {
   goal_.reset();
-  relaxed_active_ = false;
-  view_active_ = false;
+  active_ = kNone;
   path_.clear();
 }
 
@@ -429,85 +336,21 @@ void Navigator::decide(const Pose2& robot, double now_s) {
   blacklist_.expire(now_s);
   // Up to three attempts in one period: a goal without a path is blacklisted and the next one taken.
   for (int attempt = 0; attempt < 3 && !goal_; ++attempt) {
-    ExplorationSettings s = profile_.exploration.strategy;
-    // A distinct random stream per decision, derived from the profile's seed (Procedure 1).
-    s.simulation.seed = profile_.exploration.strategy.simulation.seed * 0x9E3779B97F4A7C15ull + decision_seed_++;
-    const auto t0 = std::chrono::steady_clock::now();
-    decision_ = decide_goal(model_, inflated_, robot, sectors_, blacklist_, now_s, s, ws_);
-    if (settings_.stop_when_no_frontier && decision_.status == ExplorationStatus::kSimulatedGoal) {
-      // The search ran concurrently with the simulation (concurrent_frontier_search); else run it.
-      if (!decision_.frontier_searched) {
-        decision_.frontier = find_frontier(inflated_, Eigen::Vector2f(robot.x, robot.y), blacklist_, now_s, s.frontier, ws_.frontier);
-        decision_.frontier_searched = true;
-      }
-      if (decision_.frontier.status == FrontierStatus::kNoFrontier) decision_.status = ExplorationStatus::kNoFrontier;
-      else if (decision_.frontier.status == FrontierStatus::kAllUnreachable) decision_.status = ExplorationStatus::kAllUnreachable;
-      else if (decision_.frontier.status == FrontierStatus::kAllBlacklisted) decision_.status = ExplorationStatus::kAllBlacklisted;
+    active_ = kNone;
+    GoalQuery q{robot, now_s, model_, latest_map(), inflated_, sectors_, blacklist_, decision_, log_, frontier_xy_, stats_,
+                [this](int x, int y) { return can_stand_on(x, y); }};
+    std::optional<GoalProposal> proposal;
+    for (std::size_t i = 0; i < strategies_.size() && !proposal && !q.retry; ++i) {
+      proposal = strategies_[i]->propose(q);
+      if (proposal) active_ = i;
     }
-    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    ++stats_.decisions;
-    stats_.decision_time_sum_s += dt;
-    stats_.decision_time_max_s = std::max(stats_.decision_time_max_s, dt);
-    DecisionRecord rec;
-    rec.t_s = now_s;
-    rec.status = decision_.status;
-    rec.reward_bits = decision_.reward_bits;
-    rec.robot = robot;
-    rec.goal = decision_.goal;
-    rec.wall_time_s = dt;
-    rec.frontier_cells = decision_.frontier.frontier_cells;
-    rec.reached_cells = decision_.frontier.reached_cells;
-    float best = std::numeric_limits<float>::infinity();
-    for (const auto& c : decision_.frontier.clusters)
-      if (c.reachable) {
-        ++rec.reachable_clusters;
-        if (c.path_length_m < best) {
-          best = c.path_length_m;
-          rec.nearest_frontier = c.nearest_xy;
-        }
-      }
-    log_.push_back(rec);
-    if (!decision_.frontier.clusters.empty() || decision_.frontier.status != FrontierStatus::kNoFrontier) {
-      frontier_xy_.clear();
-      const auto& fw = ws_.frontier;
-      for (const std::uint32_t i : fw.frontier)
-        if (i < inflated_.cell_count() && i < fw.mask.size() && fw.mask[i]) frontier_xy_.push_back(inflated_.cell_center(static_cast<std::size_t>(i)));
-    }
-    if (decision_.status == ExplorationStatus::kAllBlacklisted) {
-      // Goals abandoned for a while (time limit, no path, an obstacle where the frontier was)
-      // must not end the exploration: forget them and decide again. Only frontiers the robot
-      // stood at and looked at (blacklisted for good) may end it.
-      GoalBlacklist keep;
-      for (const auto& e : blacklist_.entries())
-        if (std::isinf(e.expiry_s)) keep.add(e.xy, now_s, std::numeric_limits<double>::infinity());
-      if (keep.size() < blacklist_.size()) {
-        blacklist_ = keep;
-        continue;
-      }
-    }
-    relaxed_active_ = false;
-    view_active_ = false;
-    if (!decision_.has_goal() && try_relaxed(robot, now_s)) {
-      log_.back().status = decision_.status;
-      log_.back().relaxed = true;
-    }
-    std::optional<Pose2> view;
-    if (!decision_.has_goal() && settings_.view_range_m > 0.0f &&
-        (decision_.status == ExplorationStatus::kAllUnreachable || decision_.status == ExplorationStatus::kAllBlacklisted))
-      view = find_view(robot, now_s);
-    if (!decision_.has_goal() && !view) {
+    if (q.retry) continue;
+    if (!proposal) {
       wait_for_map_ = true;
       if (++no_goal_decisions_ > settings_.final_retries) finish(robot, now_s);
       return;
     }
-    if (view) {
-      view_active_ = true;
-      log_.back().view = true;
-      log_.back().view_target = view_target_;
-      goal_ = *view;
-    } else {
-      goal_ = decision_.goal;
-    }
+    goal_ = proposal->goal;
     goal_target_ = Eigen::Vector2f(goal_->x, goal_->y);
     if (!recheck_goal()) {
       abandon_goal(stats_.goals_abandoned_no_path, now_s);
@@ -519,8 +362,8 @@ void Navigator::decide(const Pose2& robot, double now_s) {
       continue;
     }
     log_.back().planned = true;
-    if (view_active_) ++stats_.view_goals;
-    else if (decision_.status == ExplorationStatus::kSimulatedGoal) ++stats_.simulated_goals;
+    if (proposal->kind == GoalKind::kView) ++stats_.view_goals;
+    else if (proposal->kind == GoalKind::kSimulated) ++stats_.simulated_goals;
     else ++stats_.frontier_goals;
     no_goal_decisions_ = 0;
     float length = 0.0f;
@@ -566,8 +409,7 @@ bool Navigator::plan_home(const Pose2& robot, double now_s) {
   const Eigen::Vector2f home = trail_.front();
   goal_ = Pose2{home.x(), home.y(), robot.theta};
   goal_target_ = home;
-  view_active_ = false;
-  relaxed_active_ = false;
+  active_ = kNone;
   if (!recheck_goal() || !plan(robot)) {
     drop_goal();
     wait_for_map_ = true;  // try again on the next map

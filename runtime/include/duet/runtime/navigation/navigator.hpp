@@ -14,10 +14,10 @@
 /// active, the relaxed grid.
 ///
 /// Goal life cycle (the paper: "a new goal when the last is reached or its time limit passes"):
-///  - decide() takes a decision when there is no goal: goal selection tries, in order, the
-///    partial map simulation (Procedure 1), the frontier search, the frontier search on the
-///    relaxed grid, and view goals (see ExplorerSettings); a goal is moved to a cell the
-///    dynamic window can stand on (standoff), then a path is planned (A* on the planning grid);
+///  - decide() takes a decision when there is no goal: it asks its goal strategies in order
+///    (goal_strategy.hpp; by default Procedure 1 and the frontier search, the frontier search on
+///    a relaxed grid, view goals); the first goal proposed is moved to a cell the dynamic window
+///    can stand on (standoff), then a path is planned (A* on the planning grid);
 ///  - a frontier goal reached and looked at is blacklisted for good; a goal abandoned (time
 ///    limit, no path, stuck, blocked) for blacklist_ttl_s; a view goal's frontier cell is
 ///    never looked at again;
@@ -36,9 +36,11 @@
 #include <duet/kernels/path.hpp>
 #include <duet/runtime/config/profile.hpp>
 #include <duet/runtime/navigation/explorer_settings.hpp>
+#include <duet/runtime/navigation/goal_strategy.hpp>
 #include <duet/runtime/robot/latency.hpp>
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -81,7 +83,10 @@ enum class AbandonReason { kTimeout, kStuck };
 
 class Navigator {
  public:
+  /// With the default goal strategies (make_goal_strategies()).
   explicit Navigator(const Profile& profile, const ExplorerSettings& settings = {});
+  /// With an ordered list of goal strategies (at least one; asked in order at each decision).
+  Navigator(const Profile& profile, const ExplorerSettings& settings, std::vector<std::unique_ptr<GoalStrategy>> strategies);
 
   /// The latest map: rebuilds the costmaps, re-checks and re-plans the current goal.
   void update_map(const OccupancyGrid& grid, const Pose2& robot, double now_s);
@@ -115,7 +120,8 @@ class Navigator {
   [[nodiscard]] const std::optional<Pose2>& goal() const noexcept { return goal_; }
   [[nodiscard]] const std::vector<Eigen::Vector2f>& path() const noexcept { return path_; }
   [[nodiscard]] const InflatedGrid& inflated() const noexcept { return inflated_; }
-  [[nodiscard]] const InflatedGrid& planning_grid() const noexcept { return relaxed_active_ ? relaxed_ : inflated_; }
+  /// The grid paths are planned on: the goal's strategy's own (a relaxed grid), else inflated().
+  [[nodiscard]] const InflatedGrid& planning_grid() const noexcept;
   [[nodiscard]] const InflatedGrid& local_grid() const noexcept { return local_; }
   [[nodiscard]] const std::vector<Eigen::Vector2f>& contacts() const noexcept { return contacts_; }
   [[nodiscard]] const std::vector<Eigen::Vector2f>& recent_obstacles() const noexcept { return recent_; }
@@ -132,29 +138,24 @@ class Navigator {
   void mark_recent(OccupancyGrid& g);
   bool plan(const Pose2& robot);
   void abandon_goal(int& counter, double now_s);
+  [[nodiscard]] GridView latest_map() const;
+  [[nodiscard]] GoalStrategy* active() const;
   void drop_goal();
   [[nodiscard]] float dwa_clearance() const;
   [[nodiscard]] DwaSettings dwa_settings() const;
-  [[nodiscard]] float relaxed_radius() const;
   [[nodiscard]] bool can_stand_on(int x, int y) const;
   [[nodiscard]] std::optional<Eigen::Vector2f> standoff(const Eigen::Vector2f& target) const;
   bool recheck_goal();
-  void build_relaxed();
-  bool try_relaxed(const Pose2& robot, double now_s);
   /// Nothing left to explore: stop, or (OnDone::kReturnHome) start driving home.
   void finish(const Pose2& robot, double now_s);
   /// A goal at the start position and a path to it; false if none.
   bool plan_home(const Pose2& robot, double now_s);
-  [[nodiscard]] std::optional<Pose2> find_view(const Pose2& robot, double now_s);
 
   Profile profile_;
   ExplorerSettings settings_;
   std::vector<SensorSector> sectors_;
   ObservationModel model_;
   InflatedGrid inflated_;
-  InflatedGrid relaxed_;
-  bool relaxed_active_ = false;
-  bool relaxed_boxed_in_ = false;
   InflatedGrid local_;
   OccupancyGrid local_grid_{0.05f};
   std::vector<Eigen::Vector2f> trail_;
@@ -164,11 +165,9 @@ class Navigator {
   OccupancyGrid contact_grid_{0.05f};
   bool marked_ = false;
   GoalBlacklist blacklist_;
-  GoalBlacklist viewed_;
-  bool view_active_ = false;
-  Eigen::Vector2f view_target_{0.0f, 0.0f};
-  FrontierWorkspace view_ws_;
-  ExplorationWorkspace ws_;
+  std::vector<std::unique_ptr<GoalStrategy>> strategies_;
+  static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  std::size_t active_ = kNone;  ///< the strategy whose goal is the current one (kNone: none, or home)
   PathWorkspace path_ws_;
   ExplorationDecision decision_;
   ExplorerState state_ = ExplorerState::kIdle;
@@ -183,7 +182,6 @@ class Navigator {
   double goal_deadline_s_ = 0.0;
   int no_goal_decisions_ = 0;
   bool wait_for_map_ = false;
-  std::uint64_t decision_seed_ = 0;
   std::vector<DecisionRecord> log_;
   std::vector<Eigen::Vector2f> frontier_xy_;
   LatencyStats decide_latency_;
