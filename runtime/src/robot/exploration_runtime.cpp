@@ -109,11 +109,11 @@ class ExplorationRuntime::Link final : public GoalLink {
   void decide(const Pose2& robot, double now_s) override { rt_.submit_decision(robot, now_s); }
   void goal_reached(std::uint64_t id, double now_s) override {
     dropped_goal_id_ = std::max(dropped_goal_id_, id);
-    post({Event::Kind::kReached, {}, id, AbandonReason::kTimeout, now_s});
+    post({Event::Kind::kReached, Eigen::Vector2f::Zero(), id, AbandonReason::kTimeout, now_s});
   }
   void abandon(std::uint64_t id, AbandonReason why, double now_s) override {
     dropped_goal_id_ = std::max(dropped_goal_id_, id);
-    post({Event::Kind::kAbandon, {}, id, why, now_s});
+    post({Event::Kind::kAbandon, Eigen::Vector2f::Zero(), id, why, now_s});
   }
   /// A map update that started after the stall was posted has been taken: the navigator knows.
   void map_seen() { stall_pending_ = false; }

@@ -2,8 +2,8 @@
 /// @file controller.hpp
 /// The control half of the explorer: at the control rate (20 Hz) it follows the goal and the
 /// path the Navigator (navigator.hpp) publishes with the dynamic window (dwa.hpp), and tells the
-/// goal life cycle what happened through a GoalLink. Its behaviours are separate pieces, tried
-/// in this order each period:
+/// goal life cycle what happened through a GoalLink. Its behaviours are separate pieces
+/// (stall_detector.hpp, slow_zone.hpp, escape.hpp), tried in this order each period:
 ///  - stall: commanded forward, the odometry measures no motion for stall_timeout_s - a
 ///    contact the sensors cannot see: GoalLink::stall() with a contact point just ahead;
 ///  - no goal: ask for a decision (GoalLink::decide), zero twist until there is a goal;
@@ -21,7 +21,10 @@
 /// Frames: map frame. Thread safety: one thread at a time.
 #include <duet/kernels/dwa.hpp>
 #include <duet/runtime/config/profile.hpp>
+#include <duet/runtime/navigation/escape.hpp>
 #include <duet/runtime/navigation/navigator.hpp>
+#include <duet/runtime/navigation/slow_zone.hpp>
+#include <duet/runtime/navigation/stall_detector.hpp>
 
 #include <limits>
 #include <optional>
@@ -67,21 +70,14 @@ class Controller {
 
  private:
   Twist follow(const Pose2& robot, const Twist& current, double now_s, GoalLink& link);
-  /// The slow zone's top speed at `robot` on `planning`.
-  [[nodiscard]] float speed_limit(const Pose2& robot, const DwaSettings& ds, const InflatedGrid& planning) const;
-  /// Turn towards the largest clearance of `g` 2 cells away, then creep at 0.1 m/s; nullopt when
-  /// no such cell has more clearance than the robot's, or (not cornered) the robot is outside
-  /// the dynamic window's margin.
-  [[nodiscard]] std::optional<Twist> escape(const Pose2& robot, const Twist& current, const InflatedGrid& g, bool cornered,
-                                            const DwaSettings& ds) const;
 
   Profile profile_;
   ExplorerSettings settings_;
+  StallDetector stall_;
+  SlowZone slow_zone_;
+  CorneredWatch cornered_;
   Twist last_cmd_;
-  double stall_since_s_ = -1.0;
   double stuck_since_s_ = -1.0;
-  float cornered_s_ = 0.0f;
-  Eigen::Vector2f cornered_at_{std::numeric_limits<float>::infinity(), 0.0f};
   std::uint64_t goal_id_ = 0;  ///< the goal the state below belongs to
   DwaState dwa_state_;
   DwaWorkspace dwa_ws_;

@@ -1,0 +1,28 @@
+#pragma once
+/// @file world_detail.hpp
+/// Polygon helpers shared by the world loaders (world.cpp) and the geometry queries (world_geometry.cpp).
+#include <duet/sim/world.hpp>
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <vector>
+
+namespace duet::sim::world_detail {
+
+inline bool point_in_polygon(const std::vector<Eigen::Vector2f>& poly, const Eigen::Vector2f& p) {
+  bool inside = false;
+  for (std::size_t i = 0, n = poly.size(), j = n - 1; i < n; j = i++) {
+    const Eigen::Vector2f& a = poly[i];
+    const Eigen::Vector2f& b = poly[j];
+    if ((a.y() > p.y()) != (b.y() > p.y())) {
+      const float x = a.x() + (p.y() - a.y()) * (b.x() - a.x()) / (b.y() - a.y());
+      if (p.x() < x) inside = !inside;
+    }
+  }
+  return inside;
+}
+
+inline bool height_overlaps(const Solid& s, float z_low, float z_high) { return s.z_max_m > z_low && s.z_min_m < z_high; }
+
+}  // namespace duet::sim::world_detail
