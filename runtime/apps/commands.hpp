@@ -2,6 +2,7 @@
 // Sub-commands of the `duet` program; each registers itself on the CLI11 app and runs from
 // its callback, setting exit_code.
 #include <duet/runtime/config/profile.hpp>
+#include <duet/runtime/robot/robot_source.hpp>
 
 #include <CLI/CLI.hpp>
 
@@ -18,5 +19,9 @@ void add_map_command(CLI::App& app, int& exit_code);
 void add_profile_command(CLI::App& app, int& exit_code);
 void add_explore_command(CLI::App& app, int& exit_code);
 void add_compare_command(CLI::App& app, int& exit_code);
+void add_run_command(CLI::App& app, int& exit_code);
+
+/// The robot sources `duet run` knows (robot_sources.cpp: one line each).
+[[nodiscard]] const RobotSourceRegistry& robot_sources();
 
 }  // namespace duet::app

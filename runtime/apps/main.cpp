@@ -1,4 +1,4 @@
-// The `duet` command-line program: `duet explore`, `duet compare`, `duet map`, `duet profile`.
+// The `duet` command-line program: `duet explore`, `duet compare`, `duet run`, `duet map`, `duet profile`.
 #include "commands.hpp"
 
 #include <duet/kernels/error.hpp>
@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   duet::app::add_profile_command(app, exit_code);
   duet::app::add_explore_command(app, exit_code);
   duet::app::add_compare_command(app, exit_code);
+  duet::app::add_run_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

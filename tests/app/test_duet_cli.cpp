@@ -302,3 +302,28 @@ TEST(DuetCli, CompareRunsBothProfilesAndPlotsThem) {
   EXPECT_EQ(j["mean"]["dual"]["runs"], 1);
   EXPECT_EQ(j["mean"]["single"]["runs"], 1);
 }
+
+// `duet run`: the robot loop on a source by name; the simulator is one source among others.
+TEST(DuetCli, RunsTheLoopOnARobotSourceByName) {
+  const fs::path dir = temp_dir("run");
+  const fs::path world = write_file(dir, "room.yaml", kRoomWorld);
+  const CliRun r = run("run -q --robot sim:" + world.string() + " --max-time 20 --out " + (dir / "out").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const fs::path out = dir / "out";
+  for (const char* f : {"grid.yaml", "grid.pgm", "grid.png", "cloud.pcd", "summary.json"}) EXPECT_TRUE(fs::exists(out / f)) << f;
+  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(s["robot"], "sim:" + world.string());
+  EXPECT_GT(s["time_s"].get<double>(), 5.0);
+  EXPECT_LE(s["time_s"].get<double>(), 20.0 + 1e-6);
+  EXPECT_GT(s["sets_integrated"].get<int>(), 5);
+  EXPECT_GT(s["runtime"]["decision"]["count"].get<int>(), 0);
+  EXPECT_GT(duet::read_map_server(out / "grid.yaml").known_cells(), 1000u);
+  // An unknown source names the known ones; a bad world names the file.
+  const CliRun bad = run("run -q --robot kobuki --max-time 1 --out " + (dir / "bad").string());
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.output.find("unknown robot source 'kobuki'"), std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("known: sim"), std::string::npos) << bad.output;
+  const CliRun missing = run("run -q --robot sim:" + (dir / "nope.yaml").string() + " --max-time 1 --out " + (dir / "bad").string());
+  EXPECT_NE(missing.code, 0);
+  EXPECT_NE(missing.output.find("nope.yaml"), std::string::npos) << missing.output;
+}

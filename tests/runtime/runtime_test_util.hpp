@@ -1,10 +1,13 @@
 #pragma once
-// Helpers shared by the runtime tests: a temporary directory per test and whole-file bytes.
+// Helpers shared by the runtime tests: a temporary directory per test, whole-file bytes, error messages.
+#include <duet/kernels/error.hpp>
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <system_error>
@@ -52,6 +55,16 @@ inline std::string slurp(const fs::path& p) {
 inline void spit(const fs::path& p, const std::string& bytes) {
   std::ofstream out(p, std::ios::binary | std::ios::trunc);
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+/// The message of the duet::Error `fn` throws ("" if it throws none).
+inline std::string error_of(const std::function<void()>& fn) {
+  try {
+    fn();
+  } catch (const duet::Error& e) {
+    return e.what();
+  }
+  return {};
 }
 
 }  // namespace duet_test

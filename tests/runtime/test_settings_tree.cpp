@@ -17,14 +17,7 @@
 
 namespace {
 
-std::string error_of(const std::function<void()>& fn) {
-  try {
-    fn();
-  } catch (const duet::Error& e) {
-    return e.what();
-  }
-  return {};
-}
+using duet_test::error_of;
 
 /// Every leaf of a mapping tree (sequences are not walked: the sensors), as (dotted path, scalar).
 void leaves(const YAML::Node& n, const std::string& path, std::vector<std::pair<std::string, std::string>>& out) {

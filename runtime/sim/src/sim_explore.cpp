@@ -4,6 +4,8 @@
 #include <duet/kernels/grid_view.hpp>
 #include <duet/sim/sim_explore.hpp>
 
+#include "seed_mix.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -14,27 +16,21 @@ namespace {
 
 constexpr double kPaperAreaM2 = 31.0;  // paper §4.2, Fig. 10: dual sensors, 31.0 m^2 in 196 s
 
-std::uint64_t mix(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-
-ChassisSimSettings chassis_settings(const Profile& profile, const ExploreSettings& s) {
-  ChassisSimSettings c = s.chassis ? *s.chassis : ChassisSimSettings::from_profile(profile.chassis);
-  // The Kobuki's odometry takes its heading from the gyro (kobuki_node's default).
-  if (!s.chassis) c.gyro_heading = true;
-  c.seed = mix(s.seed ^ 0xC4A551ull);
-  return c;
-}
-
 Profile seeded(Profile p, std::uint64_t seed) {
   p.exploration.strategy.simulation.seed = mix(seed ^ 0x5EED5EEDull);
   return p;
 }
 
 double sensor_rate(const ExploreSettings& s) { return s.sensor_rate_hz > 0.0 ? s.sensor_rate_hz : s.runtime.map_rate_hz; }
+
+SimRobotSettings robot_settings(const ExploreSettings& s) {
+  SimRobotSettings r;
+  r.seed = s.seed;
+  r.sensor_rate_hz = sensor_rate(s);
+  r.render = s.render;
+  r.chassis = s.chassis;
+  return r;
+}
 
 /// The runtime's settings, with the sensors' rate the simulator renders at.
 RuntimeSettings runtime_settings(const ExploreSettings& s) {
@@ -70,40 +66,6 @@ void validate(const ExploreSettings& s) {
   validate(runtime_settings(s));
 }
 
-SimRgbdSensor::SimRgbdSensor(const RgbdRenderer& renderer, const SimChassis& chassis, SensorProfile sensor, double rate_hz,
-                             std::uint64_t seed)
-    : renderer_(renderer), chassis_(chassis), sensor_(std::move(sensor)), period_s_(0.0), seed_(seed) {
-  if (!(std::isfinite(rate_hz) && rate_hz > 0.0 && rate_hz <= 1000.0))
-    fail(ErrorCode::kInvalidArgument, "SimRgbdSensor '" + sensor_.name + "': rate_hz must be in (0, 1000], got " + std::to_string(rate_hz));
-  period_s_ = 1.0 / rate_hz;
-}
-
-bool SimRgbdSensor::capture(double now_s) {
-  if (now_s + 1e-9 < next_t_) return false;
-  StampedRgbd f;
-  f.stamp_s = now_s;
-  if (!spare_.empty()) {
-    f.image = std::move(spare_.back());
-    spare_.pop_back();
-  }
-  renderer_.render(sensor_, to_isometry(chassis_.true_pose()) * sensor_.T_robot_optical(), mix(seed_ + 0x100000001B3ull * rendered_),
-                   f.image);
-  ++rendered_;
-  out_.push_back(std::move(f));
-  while (next_t_ <= now_s + 1e-9) next_t_ += period_s_;
-  return true;
-}
-
-std::vector<StampedRgbd> SimRgbdSensor::take_frames() {
-  std::vector<StampedRgbd> out;
-  out.swap(out_);
-  return out;
-}
-
-void SimRgbdSensor::recycle(RgbdImage&& image) {
-  if (spare_.size() < 4) spare_.push_back(std::move(image));
-}
-
 SimExplore::SimExplore(World world, Profile profile, ExploreSettings settings)
     : world_([&] {
         validate(world, world.source.empty() ? "world" : world.source);
@@ -111,23 +73,15 @@ SimExplore::SimExplore(World world, Profile profile, ExploreSettings settings)
       }()),
       profile_(seeded(std::move(profile), settings.seed)),
       settings_((validate(settings), settings)),
-      renderer_(*world_, settings_.render),
-      chassis_(world_, chassis_settings(profile_, settings_), world_->start, ChassisBody::from_profile(profile_.chassis)) {
-  validate(profile_, profile_.name);
-  std::vector<RgbdSensorInterface*> ifaces;
-  for (std::size_t i = 0; i < profile_.sensors.size(); ++i) {
-    sensors_.push_back(std::make_unique<SimRgbdSensor>(renderer_, chassis_, profile_.sensors[i], sensor_rate(settings_),
-                                                       mix(settings_.seed * 0x9E3779B97F4A7C15ull + i)));
-    ifaces.push_back(sensors_.back().get());
-  }
-  runtime_ = std::make_unique<ExplorationRuntime>(profile_, chassis_, ifaces, runtime_settings(settings_));
+      robot_((validate(profile_, profile_.name), world_), profile_, robot_settings(settings_)) {
+  runtime_ = std::make_unique<ExplorationRuntime>(profile_, robot_.chassis(), robot_.sensors(), runtime_settings(settings_));
   dt_ = 1.0 / settings_.runtime.control_rate_hz;
   truth_ = rasterize(*world_, settings_.coverage_resolution_m, 0.0f, 0.6f);
   float range = 0.0f;
   for (const auto& s : profile_.sensors) range = std::max(range, s.max_depth_m);
   reachable_ = reachable_free_mask(truth_, world_->start, profile_.exploration.inflation.robot_radius_m, range);
   for (const auto m : reachable_) reachable_count_ += m;
-  true_traj_.push_back({0.0, chassis_.true_pose()});
+  true_traj_.push_back({0.0, robot_.sim_chassis().true_pose()});
   est_traj_.push_back({0.0, world_->start});
 }
 
@@ -156,34 +110,24 @@ CurvePoint SimExplore::measure() const {
 
 bool SimExplore::step() {
   if (reason_ != StopReason::kRunning) return false;
-  // 1-2. The chassis moves one control period (physics inside; odometry at 50 Hz), stopping at
-  // every instant a sensor is due (30 Hz frames fall between 20 Hz control ticks), where the
-  // sensor renders from the true pose of that instant.
+  // 1-2. The chassis moves one control period (physics inside; odometry at 50 Hz); the sensors
+  // render when due, from the true pose of that instant (SimRobot::advance).
   const double t_end = t_ + dt_;
-  const std::size_t collisions_before = chassis_.collisions();
-  double t_chassis = t_;
-  for (;;) {
-    double next = t_end;
-    for (const auto& s : sensors_) next = std::min(next, s->next_due_s());
-    if (next > t_chassis) {
-      chassis_.advance(next - t_chassis);
-      t_chassis = next;
-    }
-    for (auto& s : sensors_) (void)s->capture(t_chassis);
-    if (t_chassis + 1e-9 >= t_end) break;
-  }
+  const SimChassis& chassis = robot_.sim_chassis();
+  const std::size_t collisions_before = chassis.collisions();
+  robot_.advance(t_end);
   t_ = t_end;
-  if (chassis_.collisions() > collisions_before) collision_log_.push_back({t_, chassis_.true_pose(), runtime_->last_command()});
+  if (chassis.collisions() > collisions_before) collision_log_.push_back({t_, chassis.true_pose(), runtime_->last_command()});
   // Paced by the wall clock, the robot's tick comes at its time: the world of the period (its
   // motion, the frames stamped in it) was computed ahead, as sensors deliver frames on their
   // own, so the control period is the runtime's and not the renderer's.
   if (settings_.realtime) wall_.sleep_until(t_);
   // 3. The robot's runtime: synchronizer -> mapper -> explorer -> command.
-  runtime_->override_pose(settings_.use_true_pose ? std::optional<Pose2>(chassis_.true_pose()) : std::nullopt);
+  runtime_->override_pose(settings_.use_true_pose ? std::optional<Pose2>(chassis.true_pose()) : std::nullopt);
   runtime_->tick(t_);
 
   // 4. Scoring.
-  const Pose2 truth = chassis_.true_pose();
+  const Pose2 truth = chassis.true_pose();
   const Pose2 last = true_traj_.back().pose;
   path_length_ += std::hypot(truth.x - last.x, truth.y - last.y);
   true_traj_.push_back({t_, truth});
@@ -239,16 +183,16 @@ ExploreSummary SimExplore::summary() const {
   s.t_paper_area_s = t_paper_;
   s.target_entered_s = target_entered_;
   s.path_length_m = path_length_;
-  s.collisions = chassis_.collisions();
+  s.collisions = robot_.sim_chassis().collisions();
   s.explorer = runtime_->explorer_stats();
-  for (const auto& sensor : sensors_) s.frames_rendered += sensor->frames_rendered();
+  s.frames_rendered = robot_.frames_rendered();
   const RuntimeStats& rs = runtime_->stats();
   s.sets_integrated = rs.sets_integrated;
   s.sets_not_integrated = rs.sets_not_integrated;
   s.frame_drops = rs.frame_drops;
   s.odometry_unmatched = rs.odometry_unmatched;
-  const Pose2 tp = chassis_.true_pose();
-  s.odometry_error_m = std::hypot(chassis_.odometry_pose().x - tp.x, chassis_.odometry_pose().y - tp.y);
+  const Pose2 tp = robot_.sim_chassis().true_pose();
+  s.odometry_error_m = std::hypot(robot_.sim_chassis().odometry_pose().x - tp.x, robot_.sim_chassis().odometry_pose().y - tp.y);
   const Pose2 est = runtime_->pose();
   s.pose_error_m = std::hypot(est.x - tp.x, est.y - tp.y);
   s.pose_error_max_m = pose_error_max_;

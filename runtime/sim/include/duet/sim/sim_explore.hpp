@@ -33,6 +33,7 @@
 #include <duet/runtime/config/profile.hpp>
 #include <duet/sim/chassis.hpp>
 #include <duet/sim/renderer.hpp>
+#include <duet/sim/sim_robot.hpp>
 #include <duet/sim/world.hpp>
 #include <duet/runtime/robot/clock.hpp>
 #include <duet/runtime/robot/synchronizer.hpp>
@@ -133,34 +134,6 @@ struct StampedPose {
   Pose2 pose;
 };
 
-/// A simulated RGB-D sensor on a SimChassis: renders the world from the chassis' true pose
-/// when its period is due (capture()), and publishes the frame through the
-/// RgbdSensorInterface. Frame noise is seeded from (seed, frame index).
-class SimRgbdSensor final : public RgbdSensorInterface {
- public:
-  /// `renderer` and `chassis` must outlive the sensor; rate_hz in (0, 1000].
-  SimRgbdSensor(const RgbdRenderer& renderer, const SimChassis& chassis, SensorProfile sensor, double rate_hz,
-                std::uint64_t seed);
-  /// Renders a frame stamped now_s if one is due (the first at t = 0). Returns true if it rendered.
-  bool capture(double now_s);
-  [[nodiscard]] std::vector<StampedRgbd> take_frames() override;
-  void recycle(RgbdImage&& image) override;
-  [[nodiscard]] std::size_t frames_rendered() const noexcept { return rendered_; }
-  /// When the next frame is due [s].
-  [[nodiscard]] double next_due_s() const noexcept { return next_t_; }
-
- private:
-  const RgbdRenderer& renderer_;
-  const SimChassis& chassis_;
-  SensorProfile sensor_;
-  double period_s_;
-  double next_t_ = 0.0;
-  std::uint64_t seed_;
-  std::size_t rendered_ = 0;
-  std::vector<StampedRgbd> out_;
-  std::vector<RgbdImage> spare_;
-};
-
 class SimExplore {
  public:
   /// Builds the renderer, the chassis, the mapper and the explorer. Throws duet::Error for an
@@ -186,7 +159,7 @@ class SimExplore {
   [[nodiscard]] const Explorer& explorer() const noexcept { return runtime_->explorer(); }
   [[nodiscard]] const ExplorationRuntime& runtime() const noexcept { return *runtime_; }
   [[nodiscard]] const World& world() const noexcept { return *world_; }
-  [[nodiscard]] const SimChassis& chassis() const noexcept { return chassis_; }
+  [[nodiscard]] const SimChassis& chassis() const noexcept { return robot_.sim_chassis(); }
   /// Current explored area [m^2] and coverage (as in the curve).
   [[nodiscard]] CurvePoint measure() const;
 
@@ -194,9 +167,7 @@ class SimExplore {
   std::shared_ptr<const World> world_;
   Profile profile_;
   ExploreSettings settings_;
-  RgbdRenderer renderer_;
-  SimChassis chassis_;
-  std::vector<std::unique_ptr<SimRgbdSensor>> sensors_;
+  SimRobot robot_;
   std::unique_ptr<ExplorationRuntime> runtime_;
   TruthGrid truth_;
   std::vector<std::uint8_t> reachable_;

@@ -1,0 +1,110 @@
+// `duet run`: the runtime on a robot source by name (robot_source.hpp) - the loop a robot runs,
+// with no ground truth and no scoring (`duet explore` scores the simulator's runs). Writes the
+// grid map, the cloud map and summary.json (the runtime's timing and why it stopped).
+#include "commands.hpp"
+
+#include <duet/kernels/error.hpp>
+#include <duet/runtime/io/cloud_io.hpp>
+#include <duet/runtime/io/grid_io.hpp>
+#include <duet/runtime/robot/robot_loop.hpp>
+
+#include <nlohmann/json.hpp>
+#include <tbb/task_arena.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+namespace duet::app {
+namespace {
+
+struct RunOptions {
+  std::string robot = "sim:lab";
+  std::string profile = "dual";
+  std::vector<std::string> configs, sets;
+  std::uint64_t seed = 1;
+  double max_time = 600.0;
+  bool realtime = false;
+  std::string out = "out/run";
+  int threads = 0;
+  bool quiet = false;
+};
+
+nlohmann::json latency(const LatencySummary& l) {
+  return {{"count", l.count}, {"p50_ms", 1e3 * l.p50_s}, {"p99_ms", 1e3 * l.p99_s}, {"max_ms", 1e3 * l.max_s}, {"mean_ms", 1e3 * l.mean_s}};
+}
+
+int run(const RunOptions& o) {
+  Profile profile = resolve_profile(o.profile, overlays(o.configs, o.sets));
+  if (o.realtime) profile.runtime.execution = Execution::kBackground;  // control never waits on the wall clock
+  RobotRunSettings rs;
+  rs.max_time_s = o.max_time;
+  rs.realtime = o.realtime;
+  validate(rs);
+  const std::filesystem::path out(o.out);
+  std::filesystem::create_directories(out);
+  tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
+  int code = 0;
+  arena.execute([&] {
+    std::unique_ptr<RobotSource> source = robot_sources().make(o.robot, profile, o.seed);
+    ExplorationRuntime runtime(profile, source->chassis(), source->sensors());
+    double next_print = 10.0;
+    const RobotRunResult r = run_robot(*source, runtime, rs, [&](double t) {
+      if (!o.quiet && t + 1e-9 >= next_print) {
+        std::fprintf(stderr, "t = %6.1f s  state %s\n", t, to_string(runtime.state()));
+        next_print += 10.0;
+      }
+      return true;
+    });
+    const OccupancyGrid& grid = runtime.map_grid();
+    if (grid.width() > 0 && grid.height() > 0) {
+      write_map_server(grid, out / "grid.yaml");
+      write_grid_png(grid, out / "grid.png");
+    }
+    write_pcd(out / "cloud.pcd", runtime.mapper().cloud(), PcdEncoding::kBinaryCompressed);
+    const RuntimeTiming& tm = r.timing;
+    nlohmann::json j;
+    j["robot"] = o.robot;
+    j["profile"] = profile.name;
+    j["time_s"] = r.time_s;
+    j["done"] = r.done;
+    j["stop_detail"] = r.stop_detail;
+    j["sets_integrated"] = r.stats.sets_integrated;
+    j["runtime"] = {{"execution", to_string(profile.runtime.execution)},
+                    {"paced_by_wall_clock", o.realtime},
+                    {"control_period", latency(tm.control_period)},
+                    {"command_latency", latency(tm.command_latency)},
+                    {"frame_to_map", latency(tm.frame_to_map)},
+                    {"decision", latency(tm.decision)},
+                    {"late_periods", tm.late_periods},
+                    {"missed_periods", tm.missed_periods}};
+    std::ofstream(out / "summary.json") << j.dump(2) << "\n";
+    if (!o.quiet)
+      std::fprintf(stderr, "%s after %.1f s%s%s; wrote %s/{grid.yaml, grid.pgm, grid.png, cloud.pcd, summary.json}\n",
+                   r.done ? "done" : "stopped", r.time_s, r.stop_detail.empty() ? "" : ": ", r.stop_detail.c_str(), out.string().c_str());
+    code = 0;
+  });
+  return code;
+}
+
+}  // namespace
+
+void add_run_command(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<RunOptions>();
+  std::string sources;
+  for (const RobotSourceKind& k : robot_sources().kinds()) sources += "\n  " + k.name + ": " + k.help;
+  CLI::App* cmd = app.add_subcommand("run", "Run the robot loop on a robot source (no ground truth, no scoring); sources:" + sources);
+  cmd->add_option("-r,--robot", o->robot, "robot source: NAME or NAME:ARGUMENT")->capture_default_str();
+  cmd->add_option("-p,--profile", o->profile, "robot profile: dual, single or a profile YAML")->capture_default_str();
+  add_overlay_options(cmd, o->configs, o->sets);
+  cmd->add_option("-s,--seed", o->seed, "seed for sources with randomness")->capture_default_str();
+  cmd->add_option("-t,--max-time", o->max_time, "time limit on the runtime's clock [s]")->capture_default_str();
+  cmd->add_flag("--realtime", o->realtime, "pace the loop by the wall clock (background execution)");
+  cmd->add_option("-o,--out", o->out, "output folder")->capture_default_str();
+  cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
+  cmd->callback([o, &exit_code] { exit_code = run(*o); });
+}
+
+}  // namespace duet::app
