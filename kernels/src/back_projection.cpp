@@ -62,10 +62,10 @@ struct FrameGeometry {
   int step;
 };
 
-}  // namespace
-
-void back_project(std::span<const SensorFrame> frames, const BackProjectionSettings& settings, PointCloud& out,
-                  std::vector<std::size_t>* sensor_offsets) {
+/// back_project() and back_project_camera(): `camera_frame` leaves the points in the optical
+/// frame; `pixels` (optional) receives each point's v * width + u.
+void back_project_impl(std::span<const SensorFrame> frames, const BackProjectionSettings& settings, PointCloud& out,
+                       std::vector<std::size_t>* sensor_offsets, std::vector<std::uint32_t>* pixels, bool camera_frame) {
   validate(settings);
   for (std::size_t i = 0; i < frames.size(); ++i) validate_frame(frames[i], i);
   const int step = settings.pixel_step;
@@ -127,6 +127,7 @@ void back_project(std::span<const SensorFrame> frames, const BackProjectionSetti
   out.clear();
   out.points.resize(n);
   out.colors.resize(n);
+  if (pixels) pixels->resize(n);
   if (sensor_offsets) {
     sensor_offsets->resize(frames.size() + 1);
     for (std::size_t i = 0; i <= frames.size(); ++i) (*sensor_offsets)[i] = row_count[row_base[i]];
@@ -151,7 +152,8 @@ void back_project(std::span<const SensorFrame> frames, const BackProjectionSetti
       const float z = depth_at(f, row, u);
       if (std::isnan(z)) continue;
       const Eigen::Vector3f pc(z * (static_cast<float>(u) - f.intrinsics.cx) * ifx, z * yn, z);
-      out.points[o] = R * pc + t;
+      out.points[o] = camera_frame ? pc : Eigen::Vector3f(R * pc + t);
+      if (pixels) (*pixels)[o] = static_cast<std::uint32_t>(v) * static_cast<std::uint32_t>(f.depth.width) + static_cast<std::uint32_t>(u);
       if (crow) {
         const std::uint8_t* px = crow + static_cast<std::size_t>(u) * ch;
         out.colors[o] = bgr ? Rgb8{px[2], px[1], px[0]} : Rgb8{px[0], px[1], px[2]};
@@ -161,6 +163,24 @@ void back_project(std::span<const SensorFrame> frames, const BackProjectionSetti
       ++o;
     }
   });
+}
+
+}  // namespace
+
+void back_project(std::span<const SensorFrame> frames, const BackProjectionSettings& settings, PointCloud& out,
+                  std::vector<std::size_t>* sensor_offsets) {
+  back_project_impl(frames, settings, out, sensor_offsets, nullptr, false);
+}
+
+void back_project_camera(std::span<const SensorFrame> frames, const BackProjectionSettings& settings, CameraPoints& out) {
+  back_project_impl(frames, settings, out.cloud, &out.offsets, &out.pixel, true);
+  out.pixel_step = settings.pixel_step;
+}
+
+void transform_points(const Eigen::Vector3f* in, std::size_t n, const Eigen::Isometry3f& T, Eigen::Vector3f* out) {
+  const Eigen::Matrix3f R = T.linear();
+  const Eigen::Vector3f t = T.translation();
+  detail::for_each_index(n, 4096, [&](std::size_t i) { out[i] = R * in[i] + t; });
 }
 
 }  // namespace duet

@@ -25,9 +25,10 @@ constexpr double kDegToRad = 0.017453292519943295;
 
 /// "Struct.field must be in RANGE, got V": the form validate(Profile) locates at its key.
 void check(const char* struct_name, const std::string& field, double v, const Range& r) {
-  if (!in_range(v, r))
-    fail(ErrorCode::kInvalidArgument,
-         std::string(struct_name) + "." + field + " must be in " + describe(r) + ", got " + format_number(v));
+  if (in_range(v, r)) return;
+  std::string msg = struct_name;
+  msg.append(".").append(field).append(" must be in ").append(describe(r)).append(", got ").append(format_number(v));
+  fail(ErrorCode::kInvalidArgument, msg);
 }
 
 }  // namespace
@@ -65,10 +66,10 @@ void validate(const SensorProfile& s) {
     fail(ErrorCode::kInvalidArgument, "SensorProfile.max_depth_m must be greater than min_depth_m (" +
                                           format_number(s.min_depth_m) + " m), got " + format_number(s.max_depth_m));
   check(kS, "depth_units_per_m", s.depth_units_per_m, kDepthUnits);
+  static const char* const kIndex[3] = {"[0]", "[1]", "[2]"};
   for (int a = 0; a < 3; ++a) {
-    const std::string idx = "[" + std::to_string(a) + "]";
-    check(kS, "extrinsics.xyz_m" + idx, s.extrinsics.xyz_m[a], kOffset);
-    check(kS, "extrinsics.zyx_euler_deg" + idx, s.extrinsics.zyx_euler_deg[a], kEuler);
+    check(kS, std::string("extrinsics.xyz_m") + kIndex[a], s.extrinsics.xyz_m[a], kOffset);
+    check(kS, std::string("extrinsics.zyx_euler_deg") + kIndex[a], s.extrinsics.zyx_euler_deg[a], kEuler);
   }
 }
 

@@ -39,7 +39,40 @@ void PoseCorrector::shift(const Pose2& D) {
   pending_t_ = -1.0;
 }
 
+void PoseCorrector::scan_from(const CameraPoints& points, std::span<const SensorFrame> frames) {
+  const int step = settings_.pixel_step;
+  const CameraPoints* src = &points;
+  if (step % points.pixel_step != 0) {  // not a sub-lattice of the points': read the images at the matcher's step
+    BackProjectionSettings bp = profile_.mapping.back_projection;
+    bp.pixel_step = step;
+    back_project_camera(frames, bp, own_points_);
+    src = &own_points_;
+  }
+  scan_cloud_.clear();
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const auto w = static_cast<std::uint32_t>(frames[i].depth.width);
+    const auto s = static_cast<std::uint32_t>(step);
+    const Eigen::Matrix3f R = frames[i].T_robot_camera.linear();  // as back_project() applies it
+    const Eigen::Vector3f t = frames[i].T_robot_camera.translation();
+    for (std::size_t k = src->offsets[i]; k < src->offsets[i + 1]; ++k) {
+      const std::uint32_t px = src->pixel[k];
+      if ((px % w) % s != 0 || (px / w) % s != 0) continue;
+      scan_cloud_.push_back(R * src->cloud.points[k] + t);
+    }
+  }
+}
+
 Pose2 PoseCorrector::update(std::span<const SensorFrame> frames, const Pose2& odom, const OccupancyGrid& grid, double t) {
+  BackProjectionSettings bp = profile_.mapping.back_projection;
+  bp.pixel_step = settings_.pixel_step;
+  back_project_camera(frames, bp, own_points_);
+  return update(own_points_, frames, odom, grid, t);
+}
+
+Pose2 PoseCorrector::update(const CameraPoints& points, std::span<const SensorFrame> frames, const Pose2& odom,
+                            const OccupancyGrid& grid, double t) {
+  if (points.offsets.size() != frames.size() + 1 || points.offsets.back() != points.cloud.size())
+    fail(ErrorCode::kInvalidArgument, "PoseCorrector::update: the points are not those of the " + std::to_string(frames.size()) + " frames");
   Pose2 prior = compose(correction_, odom);
   const auto t0 = std::chrono::steady_clock::now();
   const PoseCorrectionSettings& pc = settings_;
@@ -50,14 +83,12 @@ Pose2 PoseCorrector::update(std::span<const SensorFrame> frames, const Pose2& od
   prior.theta = std::remainder(prior.theta + heading_rate_ * static_cast<float>(dt), kTwoPi);
   // Obstacle points of the frames in the robot frame, one per grid cell (the first in pixel
   // order), heights relative to the floor of the map frame.
-  BackProjectionSettings bp = profile_.mapping.back_projection;
-  bp.pixel_step = pc.pixel_step;
-  back_project(frames, bp, scan_cloud_);
+  scan_from(points, frames);
   const float floor_z = profile_.mapping.segmentation.floor_z_m;
   const float res = grid.resolution();
   scan_keys_.clear();
   for (std::size_t i = 0; i < scan_cloud_.size(); ++i) {
-    const Eigen::Vector3f& p = scan_cloud_.points[i];
+    const Eigen::Vector3f& p = scan_cloud_[i];
     const float h = p.z() - floor_z;
     if (!(h >= pc.min_height_m && h <= pc.max_height_m)) continue;
     scan_keys_.emplace_back(cell_key(p.x(), p.y(), res), static_cast<std::uint32_t>(i));
@@ -68,7 +99,7 @@ Pose2 PoseCorrector::update(std::span<const SensorFrame> frames, const Pose2& od
   const std::size_t stride = (scan_keys_.size() + pc.max_points - 1) / pc.max_points;
   scan_points_.clear();
   for (std::size_t k = 0; k < scan_keys_.size(); k += std::max<std::size_t>(stride, 1)) {
-    const Eigen::Vector3f& p = scan_cloud_.points[scan_keys_[k].second];
+    const Eigen::Vector3f& p = scan_cloud_[scan_keys_[k].second];
     scan_points_.emplace_back(p.x(), p.y());
   }
   Pose2 at = prior;  // not accepted: the predicted drift still applies

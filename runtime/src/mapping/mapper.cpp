@@ -21,11 +21,28 @@ Mapper::Mapper(const MappingSettings& settings, const Eigen::Isometry3f& T_map_w
 
 void Mapper::integrate(std::span<const SensorFrame> frames, const Eigen::Isometry3f& T_world_robot) {
   if (!T_world_robot.matrix().allFinite()) fail(ErrorCode::kInvalidArgument, "Mapper::integrate: robot pose is not finite");
+  // All frames are validated and back-projected before anything is integrated.
+  back_project_camera(frames, settings_.back_projection, camera_);
+  integrate(camera_, frames, T_world_robot);
+}
+
+void Mapper::integrate(const CameraPoints& points, std::span<const SensorFrame> frames, const Eigen::Isometry3f& T_world_robot) {
+  if (!T_world_robot.matrix().allFinite()) fail(ErrorCode::kInvalidArgument, "Mapper::integrate: robot pose is not finite");
+  if (points.offsets.size() != frames.size() + 1 || points.offsets.back() != points.cloud.size())
+    fail(ErrorCode::kInvalidArgument, "Mapper::integrate: the points are not those of the " + std::to_string(frames.size()) + " frames");
+  if (points.pixel_step != settings_.back_projection.pixel_step)
+    fail(ErrorCode::kInvalidArgument, "Mapper::integrate: the points were sampled every " + std::to_string(points.pixel_step) +
+                                          " pixels, the mapping settings say " + std::to_string(settings_.back_projection.pixel_step));
   const Eigen::Isometry3f T_map_robot = T_map_world_ * T_world_robot;
   std::vector<SensorFrame> in_map(frames.begin(), frames.end());
   for (auto& f : in_map) f.T_robot_camera = T_map_robot * f.T_robot_camera;  // optical -> map
-  // All frames are validated and back-projected before anything is integrated.
-  back_project(in_map, settings_.back_projection, raw_, &offsets_);
+  raw_.clear();
+  raw_.points.resize(points.cloud.size());
+  raw_.colors = points.cloud.colors;
+  offsets_ = points.offsets;
+  for (std::size_t i = 0; i < in_map.size(); ++i)
+    transform_points(points.cloud.points.data() + offsets_[i], offsets_[i + 1] - offsets_[i], in_map[i].T_robot_camera,
+                     raw_.points.data() + offsets_[i]);
   stats_.raw_points += raw_.size();
   obstacles_.clear();
   for (std::size_t i = 0; i < in_map.size(); ++i) {

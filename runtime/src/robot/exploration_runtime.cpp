@@ -213,6 +213,8 @@ std::optional<Pose2> ExplorationRuntime::map_update(MapInput& in) {
   frames.reserve(n);
   for (std::size_t i = 0; i < n; ++i)
     frames.push_back(frame_view(in.images[i], profile_.sensors[i], profile_.sensors[i].T_robot_optical()));
+  // Each depth image is read once: the matcher and the mapper transform the same points.
+  back_project_camera(frames, profile_.mapping.back_projection, camera_points_);
   // The pose at the frames' time: the odometry interpolated to their mean stamp, corrected by
   // scan matching against the map before it integrates them (or, debugging, the override).
   Pose2 at;
@@ -222,11 +224,11 @@ std::optional<Pose2> ExplorationRuntime::map_update(MapInput& in) {
   } else {
     at = compose(corrector_.correction(), in.odom_at);
     if (settings_.pose_correction.enabled) {
-      at = corrector_.update(frames, in.odom_at, mapper_.grid(), in.t_frames);
+      at = corrector_.update(camera_points_, frames, in.odom_at, mapper_.grid(), in.t_frames);
       pose = compose(corrector_.correction(), in.odom_latest);
     }
   }
-  mapper_.integrate(frames, to_isometry(at));
+  mapper_.integrate(camera_points_, frames, to_isometry(at));
   std::optional<Pose2> shift;
   if (loop_ && !in.override_pose) {
     // The map frame moved: so do the correction, the pose, and what the navigator keeps.

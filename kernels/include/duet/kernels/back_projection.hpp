@@ -74,6 +74,27 @@ struct BackProjectionSettings {
 void back_project(std::span<const SensorFrame> frames, const BackProjectionSettings& settings,
                   PointCloud& out, std::vector<std::size_t>* sensor_offsets = nullptr);
 
+/// A set of frames back-projected once, before it is known where the points go: every valid
+/// sampled pixel's point in its frame's optical frame, in back_project()'s order, with the
+/// pixel it came from. A pipeline that needs the points in several frames (the scan matcher
+/// in the robot frame, the mapper in the map frame once the pose is corrected) reads the
+/// depth images once and transforms these (transform_points()); back_project() is the same
+/// two steps, bit for bit.
+struct CameraPoints {
+  PointCloud cloud;                   ///< points (optical frame of their sensor) and colours
+  std::vector<std::uint32_t> pixel;   ///< v * width + u of each point
+  std::vector<std::size_t> offsets;   ///< frames.size() + 1: the points of frame i are [offsets[i], offsets[i+1])
+  int pixel_step = 1;                 ///< the settings' pixel_step
+};
+
+/// Back-projects every frame into `out` in the optical frame (T_robot_camera is not applied).
+/// Same checks and errors as back_project().
+void back_project_camera(std::span<const SensorFrame> frames, const BackProjectionSettings& settings, CameraPoints& out);
+
+/// out[i] = T * in[i] for n points, as back_project() applies T_robot_camera (R p + t).
+/// `in` and `out` may be the same array.
+void transform_points(const Eigen::Vector3f* in, std::size_t n, const Eigen::Isometry3f& T, Eigen::Vector3f* out);
+
 /// Validates settings; throws duet::Error(kInvalidArgument) naming the bad field.
 void validate(const BackProjectionSettings& settings);
 

@@ -32,6 +32,11 @@ class PoseCorrector {
   /// `odom`; returns the pose to integrate them at (the prior correction applied to `odom`,
   /// moved towards the scan match against `grid` when one is accepted) and updates correction().
   Pose2 update(std::span<const SensorFrame> frames, const Pose2& odom, const OccupancyGrid& grid, double t);
+  /// The same with the frames already back-projected (back_project_camera() with the mapping's
+  /// settings): the matcher takes every pixel_step-th pixel of them, so each depth image is read
+  /// once per map update. The same result as update(frames, ...), bit for bit.
+  Pose2 update(const CameraPoints& points, std::span<const SensorFrame> frames, const Pose2& odom, const OccupancyGrid& grid,
+               double t);
   /// The map frame moved by D (loop closure): the correction moves with it, the reference map is dropped.
   void shift(const Pose2& D);
 
@@ -50,7 +55,10 @@ class PoseCorrector {
   float heading_rate_ = 0.0f;
   double last_match_t_ = -1.0;
   std::size_t rate_updates_ = 0;
-  PointCloud scan_cloud_;
+  /// The matcher's points of the frames (robot frame): pixel_step's lattice of `points`.
+  void scan_from(const CameraPoints& points, std::span<const SensorFrame> frames);
+  CameraPoints own_points_;             ///< when the caller's were sampled on another lattice
+  std::vector<Eigen::Vector3f> scan_cloud_;
   std::vector<Eigen::Vector2f> scan_points_;
   std::vector<std::pair<std::uint64_t, std::uint32_t>> scan_keys_;
   InflatedGrid distance_;       ///< distance to the nearest occupied cell of the reference map

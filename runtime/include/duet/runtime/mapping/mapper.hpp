@@ -53,6 +53,11 @@ class Mapper {
   /// frame is validated first, so a bad observation integrates nothing and the map keeps
   /// everything accepted before.
   void integrate(std::span<const SensorFrame> frames, const Eigen::Isometry3f& T_world_robot);
+  /// The same for frames already back-projected: `points` = back_project_camera(frames,
+  /// settings' back_projection) (a pipeline that used them before, e.g. to correct the pose,
+  /// reads each depth image once). Throws duet::Error(kInvalidArgument) if `points` do not
+  /// belong to `frames` (offsets) or were sampled with another pixel_step.
+  void integrate(const CameraPoints& points, std::span<const SensorFrame> frames, const Eigen::Isometry3f& T_world_robot);
 
   /// The global cloud (map frame), voxel-filtered at the mapping leaf size, with colours.
   [[nodiscard]] const PointCloud& cloud();
@@ -95,6 +100,7 @@ class Mapper {
   std::vector<Submap> submaps_;
   bool cloud_dirty_ = false;  // submaps: global_ is out of date
   // Reused scratch.
+  CameraPoints camera_;
   PointCloud raw_, filtered_;
   std::vector<PointLabel> labels_;
   std::vector<Eigen::Vector2f> obstacles_;

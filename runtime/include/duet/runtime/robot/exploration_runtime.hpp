@@ -145,6 +145,7 @@ class ExplorationRuntime {
   void apply_events();
   [[nodiscard]] Pose2 odometry_at(double t, const OdometryMsg& fallback) const;
 
+  CameraPoints camera_points_;  ///< the map update's frames, back-projected once (owned by whoever runs map_update)
   Profile profile_;
   RuntimeSettings settings_;
   ChassisInterface& chassis_;
