@@ -1,0 +1,274 @@
+/// @file partial_sim_rays.cpp
+/// Partial map simulation's ray precomputation: cell codes, empty-space skipping blocks and RayWalker.
+#include "partial_sim_rays.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace duet::detail::partial_sim {
+
+// Walks every ray of every stage once (the known part does not depend on j) and stores the cells:
+// known-occupied cells end a ray; unknown and free cells are stored with their kind.
+// Empty-space skipping for the walks: the grid is cut into kBlock x kBlock blocks; dist[b] is
+// the chessboard distance, in blocks, from block b to the nearest block that holds a cell that is
+// not kSkipCode (or lies on the grid's border). From a cell of a block with dist D >= 2 every cell
+// within kBlock * (D - 1) cells (chessboard) is a skip cell, so a ray can jump that far at once.
+
+void build_skip_blocks(const GridView& grid, std::span<const std::uint8_t> codes, SkipBlocks& sb) {
+  const int w = grid.width, h = grid.height;
+  sb.bw = (w + kBlock - 1) / kBlock;
+  sb.bh = (h + kBlock - 1) / kBlock;
+  const auto nb = static_cast<std::size_t>(sb.bw) * static_cast<std::size_t>(sb.bh);
+  sb.dist.assign(nb, 0);
+  // 1 where the whole block is skip cells (partial blocks at the border are never all-skip).
+  tbb::parallel_for(tbb::blocked_range<int>(0, sb.bh, 1), [&](const tbb::blocked_range<int>& r) {
+    for (int by = r.begin(); by != r.end(); ++by)
+      for (int bx = 0; bx < sb.bw; ++bx) {
+        bool all = (bx + 1) * kBlock <= w && (by + 1) * kBlock <= h;
+        for (int y = by * kBlock; all && y < (by + 1) * kBlock; ++y) {
+          const std::uint8_t* row = codes.data() + static_cast<std::size_t>(y) * static_cast<std::size_t>(w);
+          for (int x = bx * kBlock; x < (bx + 1) * kBlock; ++x) all = all && row[x] == kSkipCode;
+        }
+        sb.dist[static_cast<std::size_t>(by) * static_cast<std::size_t>(sb.bw) + static_cast<std::size_t>(bx)] = all ? 255 : 0;
+      }
+  });
+  // Chessboard distance transform (two raster passes; outside the grid counts as distance 0).
+  auto at = [&](int x, int y) -> int {
+    if (x < 0 || y < 0 || x >= sb.bw || y >= sb.bh) return 0;
+    return sb.dist[static_cast<std::size_t>(y) * static_cast<std::size_t>(sb.bw) + static_cast<std::size_t>(x)];
+  };
+  auto set = [&](int x, int y, int v) {
+    sb.dist[static_cast<std::size_t>(y) * static_cast<std::size_t>(sb.bw) + static_cast<std::size_t>(x)] =
+        static_cast<std::uint8_t>(v);
+  };
+  for (int y = 0; y < sb.bh; ++y)
+    for (int x = 0; x < sb.bw; ++x)
+      if (at(x, y)) set(x, y, std::min({at(x, y), at(x - 1, y) + 1, at(x - 1, y - 1) + 1, at(x, y - 1) + 1, at(x + 1, y - 1) + 1}));
+  for (int y = sb.bh - 1; y >= 0; --y)
+    for (int x = sb.bw - 1; x >= 0; --x)
+      if (at(x, y)) set(x, y, std::min({at(x, y), at(x + 1, y) + 1, at(x + 1, y + 1) + 1, at(x, y + 1) + 1, at(x - 1, y + 1) + 1}));
+}
+
+namespace {
+
+// The cells a ray crosses from its sensor to max_range, by a 2D DDA (Amanatides & Woo) on the
+// 64-bit fixed-point times of detail::CellWalk (observation.hpp), jumping over runs of skip cells
+// (SkipBlocks). The step is branch-free (the x-or-y choice is a conditional move on integers: a
+// float compare there compiles to a branch that mispredicts every other cell on diagonal rays,
+// and a float add chain costs ~8 cycles per cell; the integer chain compare-select-add ~3).
+// Same cells as walk_cells() (an exact tie, a ray through a cell corner, steps both axes), except
+// the skip cells jumped over: a jump to time T lands exactly where the walk would be at T (the
+// crossings before T are counted, not stepped), so jumping never changes the cells stored.
+// A known obstacle nearer than min_range blocks the ray (the sensor then measures nothing);
+// cells are observed from min_range on (a cell is observed if it is left after min_range).
+// Resumable (one cell per advance()), so that two rays can be walked in one loop.
+class RayWalker {
+ public:
+  RayWalker(const GridView& grid, std::span<const std::uint8_t> codes, const SkipBlocks& sb)
+      : grid_(grid), w_(static_cast<unsigned>(grid.width)), h_(static_cast<unsigned>(grid.height)),
+        logodds_(grid.logodds.data()), codes_(codes.data()), sb_(sb) {}
+
+  /// Starts a ray; its cells are appended to out (which must have room for max_cells()).
+  void start(const Eigen::Vector2f& o, const Eigen::Vector2f& d, float min_range, float max_range, RayCell* out) {
+    out_ = out;
+    n_ = 0;
+    done_ = !w_walk_.init(grid_, o, d, 0.0f, max_range);
+    if (done_) return;
+    const double scale = 1.0 / w_walk_.inv_scale;
+    t_min_ = static_cast<std::int64_t>(static_cast<double>(min_range) * scale + 0.5);
+    jump_unit_ = static_cast<double>(grid_.resolution_m) * scale;  // one cell of travel [fixed point]
+    inv_dx_ = 1.0 / static_cast<double>(w_walk_.dx);
+    inv_dy_ = 1.0 / static_cast<double>(w_walk_.dy);
+    ix0_ = w_walk_.ix;
+    iy0_ = w_walk_.iy;
+    mx0_ = w_walk_.mx;
+    my0_ = w_walk_.my;
+    t_now_ = 0;
+    observing_ = false;
+  }
+  [[nodiscard]] bool done() const noexcept { return done_; }
+  [[nodiscard]] std::size_t count() const noexcept { return n_; }
+  /// Upper bound of the cells of one ray of length max_range [m] at resolution res [m].
+  static std::size_t max_cells(float max_range, float res) {
+    return static_cast<std::size_t>(2.0f * max_range / res) + 8;
+  }
+
+  /// Processes the current cell and moves to the next one.
+  void advance() {
+    detail::CellWalk& c = w_walk_;
+    const bool inside = static_cast<unsigned>(c.ix) < w_ && static_cast<unsigned>(c.iy) < h_;
+    const std::size_t idx = inside ? static_cast<std::size_t>(c.iy) * w_ + static_cast<unsigned>(c.ix) : 0;
+    const std::uint32_t code = inside ? codes_[idx] : kUnknownNan + 1;
+    if (!observing_) {
+      const std::int64_t t_exit = c.next();
+      observing_ = t_exit > t_min_ || t_exit >= c.end;
+    }
+    if (code == kSkipCode) {
+      const std::uint8_t db = sb_.dist[static_cast<std::size_t>(c.iy >> kBlockShift) * static_cast<std::size_t>(sb_.bw) +
+                                       static_cast<std::size_t>(c.ix >> kBlockShift)];
+      if (db >= 2) {  // every cell within kBlock * (db - 1) cells is a skip cell: jump
+        // Travelling kBlock * (db - 1) cells along the ray moves at most that far along each axis.
+        const auto t = t_now_ + static_cast<std::int64_t>(static_cast<double>(kBlock * (db - 1)) * jump_unit_);
+        if (t >= c.end) {
+          done_ = true;
+          return;
+        }
+        jump_to(t);
+        observing_ = false;
+        return;
+      }
+      if (inside) {  // tight loop over the following skip cells (most of the walk in known space)
+        const std::int64_t sx = c.sx, sy = c.sy, step_y = c.sy * static_cast<std::int64_t>(w_);
+        const std::int64_t dx = c.dx, dy = c.dy, end = c.end;
+        const std::int64_t w = w_, h = h_;
+        const std::uint8_t* const codes = codes_;
+        auto i = static_cast<std::int64_t>(idx);
+        std::int64_t mx = c.mx, my = c.my, ix = c.ix, iy = c.iy, t_now = t_now_;
+        for (;;) {
+          const std::int64_t tn = mx < my ? mx : my;
+          if (tn >= end) {
+            done_ = true;
+            return;
+          }
+          t_now = tn;
+          const bool bx = mx <= my, by = my <= mx;  // both on a tie
+          ix += bx ? sx : 0;
+          iy += by ? sy : 0;
+          i += (bx ? sx : 0) + (by ? step_y : 0);
+          mx += bx ? dx : 0;
+          my += by ? dy : 0;
+          if (static_cast<std::uint64_t>(ix) >= static_cast<std::uint64_t>(w) ||
+              static_cast<std::uint64_t>(iy) >= static_cast<std::uint64_t>(h) || codes[i] != kSkipCode) {
+            c.mx = mx;  // the next advance() handles this cell
+            c.my = my;
+            t_now_ = t_now;
+            c.ix = static_cast<int>(ix);
+            c.iy = static_cast<int>(iy);
+            return;
+          }
+        }
+      }
+    } else if (observing_) {
+      const std::uint32_t kind = code - 1;
+      out_[n_++] = make_cell(inside ? static_cast<std::uint32_t>(idx) : kOutside, kind,
+                             kind == kUnknownNan ? 0.0f : logodds_[idx]);
+      if (kind == kOccupiedCell) {
+        done_ = true;
+        return;
+      }
+    } else if (code == kOccupiedCell + 1) {  // a known obstacle before min_range blocks the ray
+      done_ = true;
+      return;
+    }
+    const std::int64_t tn = c.next();
+    if (tn >= c.end) {
+      done_ = true;
+      return;
+    }
+    t_now_ = tn;
+    c.step();
+  }
+
+ private:
+  /// Moves the walk to time t (fixed point, t_now_ <= t < end): every crossing at a time <= t is
+  /// taken, counted by a division rounded in double and corrected exactly in integers.
+  void jump_to(std::int64_t t) {
+    detail::CellWalk& c = w_walk_;
+    auto crossings = [t](std::int64_t m0, std::int64_t d, double inv_d) -> std::int64_t {
+      if (t < m0) return 0;
+      auto k = static_cast<std::int64_t>(static_cast<double>(t - m0) * inv_d) + 1;  // ~ crossings <= t
+      while (k > 0 && m0 + (k - 1) * d > t) --k;
+      while (m0 + k * d <= t) ++k;
+      return k;
+    };
+    const std::int64_t kx = c.sx != 0 ? crossings(mx0_, c.dx, inv_dx_) : 0;
+    const std::int64_t ky = c.sy != 0 ? crossings(my0_, c.dy, inv_dy_) : 0;
+    c.ix = ix0_ + static_cast<int>(kx) * c.sx;
+    c.iy = iy0_ + static_cast<int>(ky) * c.sy;
+    c.mx = mx0_ + kx * c.dx;
+    c.my = my0_ + ky * c.dy;
+    t_now_ = t;
+  }
+
+  const GridView& grid_;
+  unsigned w_, h_;
+  const float* logodds_;
+  const std::uint8_t* codes_;
+  const SkipBlocks& sb_;
+  RayCell* out_ = nullptr;
+  std::size_t n_ = 0;
+  detail::CellWalk w_walk_;
+  std::int64_t t_now_ = 0, t_min_ = 0, mx0_ = 0, my0_ = 0;
+  double jump_unit_ = 0.0, inv_dx_ = 0.0, inv_dy_ = 0.0;
+  int ix0_ = 0, iy0_ = 0;
+  bool done_ = true, observing_ = false;
+};
+
+}  // namespace
+
+void precompute_rays(const GridView& grid, std::span<const std::uint8_t> codes, const SkipBlocks& sb, std::span<const Pose2> x,
+                     std::span<const SensorSector> sensors, std::span<const std::vector<Eigen::Vector2f>> fans, ThreadScratch& ts) {
+  ts.cells.clear();
+  ts.ray_end.clear();
+  RayWalker a(grid, codes, sb), b(grid, codes, sb);
+  for (const Pose2& pose : x) {
+    const float c = std::cos(pose.theta), sn = std::sin(pose.theta);
+    for (std::size_t si = 0; si < sensors.size(); ++si) {
+      const SensorSector& sec = sensors[si];
+      const auto nr = static_cast<std::size_t>(sec.rays);
+      ts.dirs.resize(nr);
+      const Eigen::Vector2f org = detail::fan_origin(pose, sec, c, sn);
+      for (std::size_t r = 0; r < nr; ++r) ts.dirs[r] = detail::turn(c, sn, fans[si][r]);
+      const std::size_t cap = RayWalker::max_cells(sec.max_range_m, grid.resolution_m);
+      if (ts.pair_buffer.size() < 2 * cap) ts.pair_buffer.resize(2 * cap);
+      for (std::size_t r = 0; r < nr; r += 2) {
+        const bool two = r + 1 < nr;
+        a.start(org, ts.dirs[r], sec.min_range_m, sec.max_range_m, ts.pair_buffer.data());
+        if (two) b.start(org, ts.dirs[r + 1], sec.min_range_m, sec.max_range_m, ts.pair_buffer.data() + cap);
+        while (!a.done() && two && !b.done()) {
+          a.advance();
+          b.advance();
+        }
+        while (!a.done()) a.advance();
+        while (two && !b.done()) b.advance();
+        ts.cells.insert(ts.cells.end(), ts.pair_buffer.data(), ts.pair_buffer.data() + a.count());
+        ts.ray_end.push_back(static_cast<std::uint32_t>(ts.cells.size()));
+        if (two) {
+          ts.cells.insert(ts.cells.end(), ts.pair_buffer.data() + cap, ts.pair_buffer.data() + cap + b.count());
+          ts.ray_end.push_back(static_cast<std::uint32_t>(ts.cells.size()));
+        }
+      }
+    }
+  }
+}
+
+// Per-cell code of the precomputed walks: kind + 1, or kSkipCode for a known-free cell at exactly
+// min_logodds: a miss keeps it at the clamp for any noise (l_ISM < 0), so its reward is exactly 0
+// and it never stops a ray - leaving it out changes no result and saves most of the work in
+// well-observed space.
+void build_codes(const ObservationModel& model, float clamp_min, std::vector<std::uint8_t>& codes) {
+  const auto logodds = model.grid().logodds;
+  const auto states = model.states();
+  codes.resize(logodds.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, logodds.size(), 1 << 14), [&](const tbb::blocked_range<std::size_t>& rg) {
+    for (std::size_t i = rg.begin(); i != rg.end(); ++i) {
+      const float l = logodds[i];
+      std::uint32_t kind;
+      switch (states[i]) {
+        case CellState::kOccupied: kind = kOccupiedCell; break;
+        case CellState::kFree: kind = kFreeCell; break;
+        default: kind = std::isnan(l) ? kUnknownNan : kUnknownFinite; break;
+      }
+      codes[i] = static_cast<std::uint8_t>(kind == kFreeCell && l == clamp_min ? kSkipCode : kind + 1);
+    }
+  });
+}
+
+}  // namespace duet::detail::partial_sim
