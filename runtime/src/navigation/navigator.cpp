@@ -191,8 +191,8 @@ void Navigator::update_map(const OccupancyGrid& grid, const Pose2& robot, double
   // The dynamic window's grid: unknown is an obstacle, except where the robot's body has been;
   // the recent obstacles block (ExplorerSettings::recent_obstacles_s) - only here: where the
   // pose has moved since a place was mapped, the map's copy of a wall and the recent one narrow
-  // a door between them, and planning on both closed Willow's doors (seed 6 stopped at 59 %
-  // with every frontier unreachable).
+  // a door between them, and planning on both can close doors for good (every frontier
+  // unreachable; bench/RESULTS.md has the run).
   local_grid_ = *map;
   if (!recent_.empty()) mark_recent(local_grid_);
   const float free_l = std::min(profile_.exploration.cells.free_logodds, profile_.mapping.grid_update.min_logodds);
