@@ -93,6 +93,8 @@ class GoalStrategy {
   [[nodiscard]] virtual std::optional<float> robot_radius_m() const { return std::nullopt; }
 
  protected:
+  /// blacklist_ttl_s: how long the default goal_ended() keeps an abandoned goal out
+  /// (ExplorerSettings::blacklist_ttl_s) [s].
   explicit GoalStrategy(float blacklist_ttl_s) : blacklist_ttl_s_(blacklist_ttl_s) {}
   float blacklist_ttl_s_;
 };
