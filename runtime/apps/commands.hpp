@@ -2,9 +2,11 @@
 // Sub-commands of the `duet` program; each registers itself on the CLI11 app and runs from
 // its callback, setting exit_code.
 #include <duet/runtime/config/profile.hpp>
+#include <duet/runtime/robot/exploration_runtime.hpp>
 #include <duet/runtime/robot/robot_source.hpp>
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <string>
 #include <vector>
@@ -20,6 +22,9 @@ void add_profile_command(CLI::App& app, int& exit_code);
 void add_explore_command(CLI::App& app, int& exit_code);
 void add_compare_command(CLI::App& app, int& exit_code);
 void add_run_command(CLI::App& app, int& exit_code);
+
+/// summary.json's timing of a run: the nominal control period and the latencies (p50/p99/max/mean, ms), late and missed periods.
+[[nodiscard]] nlohmann::json timing_json(const RuntimeTiming& timing);
 
 /// The robot sources `duet run` knows (robot_sources.cpp: one line each).
 [[nodiscard]] const RobotSourceRegistry& robot_sources();

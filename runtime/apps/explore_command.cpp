@@ -25,6 +25,21 @@
 #include <string>
 
 namespace duet::app {
+
+nlohmann::json timing_json(const RuntimeTiming& tm) {
+  auto latency = [](const LatencySummary& l) {
+    return nlohmann::json{{"count", l.count}, {"p50_ms", 1e3 * l.p50_s}, {"p99_ms", 1e3 * l.p99_s}, {"max_ms", 1e3 * l.max_s},
+                          {"mean_ms", 1e3 * l.mean_s}};
+  };
+  return {{"nominal_period_ms", 1e3 * tm.nominal_period_s},
+          {"control_period", latency(tm.control_period)},
+          {"command_latency", latency(tm.command_latency)},
+          {"frame_to_map", latency(tm.frame_to_map)},
+          {"decision", latency(tm.decision)},
+          {"late_periods", tm.late_periods},
+          {"missed_periods", tm.missed_periods}};
+}
+
 namespace {
 
 struct ExploreOptions {
@@ -159,21 +174,10 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                {"scan_matches", s.scan_matches},
                {"scan_match_rejected", s.scan_match_rejected},
                {"scan_match_time_s", s.scan_match_time_s}};
-  auto latency = [](const LatencySummary& l) {
-    return nlohmann::json{{"count", l.count}, {"p50_ms", 1e3 * l.p50_s}, {"p99_ms", 1e3 * l.p99_s}, {"max_ms", 1e3 * l.max_s},
-                          {"mean_ms", 1e3 * l.mean_s}};
-  };
-  const RuntimeTiming& tm = s.timing;
-  j["runtime"] = {{"execution", to_string(s.execution)},
-                  {"paced_by_wall_clock", s.realtime},
-                  {"nominal_period_ms", 1e3 * tm.nominal_period_s},
-                  {"control_period", latency(tm.control_period)},
-                  {"command_latency", latency(tm.command_latency)},
-                  {"frame_to_map", latency(tm.frame_to_map)},
-                  {"decision", latency(tm.decision)},
-                  {"late_periods", tm.late_periods},
-                  {"missed_periods", tm.missed_periods},
-                  {"map_sets_skipped", s.map_sets_skipped}};
+  j["runtime"] = timing_json(s.timing);
+  j["runtime"]["execution"] = to_string(s.execution);
+  j["runtime"]["paced_by_wall_clock"] = s.realtime;
+  j["runtime"]["map_sets_skipped"] = s.map_sets_skipped;
   j["loop_closure"] = {{"enabled", s.loop_closure},
                        {"checks", s.loops.checks},
                        {"matches", s.loops.matches},

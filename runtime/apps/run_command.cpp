@@ -31,10 +31,6 @@ struct RunOptions {
   bool quiet = false;
 };
 
-nlohmann::json latency(const LatencySummary& l) {
-  return {{"count", l.count}, {"p50_ms", 1e3 * l.p50_s}, {"p99_ms", 1e3 * l.p99_s}, {"max_ms", 1e3 * l.max_s}, {"mean_ms", 1e3 * l.mean_s}};
-}
-
 int run(const RunOptions& o) {
   Profile profile = resolve_profile(o.profile, overlays(o.configs, o.sets));
   if (o.realtime) profile.runtime.execution = Execution::kBackground;  // control never waits on the wall clock
@@ -45,7 +41,6 @@ int run(const RunOptions& o) {
   const std::filesystem::path out(o.out);
   std::filesystem::create_directories(out);
   tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
-  int code = 0;
   arena.execute([&] {
     std::unique_ptr<RobotSource> source = robot_sources().make(o.robot, profile, o.seed);
     ExplorationRuntime runtime(profile, source->chassis(), source->sensors());
@@ -63,7 +58,6 @@ int run(const RunOptions& o) {
       write_grid_png(grid, out / "grid.png");
     }
     write_pcd(out / "cloud.pcd", runtime.mapper().cloud(), PcdEncoding::kBinaryCompressed);
-    const RuntimeTiming& tm = r.timing;
     nlohmann::json j;
     j["robot"] = o.robot;
     j["profile"] = profile.name;
@@ -71,21 +65,15 @@ int run(const RunOptions& o) {
     j["done"] = r.done;
     j["stop_detail"] = r.stop_detail;
     j["sets_integrated"] = r.stats.sets_integrated;
-    j["runtime"] = {{"execution", to_string(profile.runtime.execution)},
-                    {"paced_by_wall_clock", o.realtime},
-                    {"control_period", latency(tm.control_period)},
-                    {"command_latency", latency(tm.command_latency)},
-                    {"frame_to_map", latency(tm.frame_to_map)},
-                    {"decision", latency(tm.decision)},
-                    {"late_periods", tm.late_periods},
-                    {"missed_periods", tm.missed_periods}};
+    j["runtime"] = timing_json(r.timing);
+    j["runtime"]["execution"] = to_string(profile.runtime.execution);
+    j["runtime"]["paced_by_wall_clock"] = o.realtime;
     std::ofstream(out / "summary.json") << j.dump(2) << "\n";
     if (!o.quiet)
       std::fprintf(stderr, "%s after %.1f s%s%s; wrote %s/{grid.yaml, grid.pgm, grid.png, cloud.pcd, summary.json}\n",
                    r.done ? "done" : "stopped", r.time_s, r.stop_detail.empty() ? "" : ": ", r.stop_detail.c_str(), out.string().c_str());
-    code = 0;
   });
-  return code;
+  return 0;
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // back_project vs a naive per-pixel reference; Eq. (6) extrinsics; formats, strides, colour
 // orders; real slambook2 frame; thread-count independence; bad input.
+#include "back_projection_fixtures.hpp"
 #include "kernel_test_util.hpp"
 
 #include <duet/kernels/back_projection.hpp>
@@ -17,6 +18,7 @@ namespace {
 
 using test::kInf;
 using test::kNaN;
+using namespace test::back_projection;  // synthetic frames (back_projection_fixtures.hpp)
 
 // ---- reference -----------------------------------------------------------------------------------
 
@@ -79,72 +81,6 @@ void expect_clouds_match(const PointCloud& got, const PointCloud& ref) {
 }
 
 // ---- synthetic images ----------------------------------------------------------------------------
-
-struct Image {
-  std::vector<std::uint8_t> bytes;
-  std::size_t stride = 0;
-};
-
-// uint16 depth with padding bytes after each row (filled with valid-looking garbage).
-Image make_u16_depth(int w, int h, std::size_t pad, std::uint32_t seed, double zero_fraction = 0.1) {
-  std::mt19937 rng(seed);
-  std::uniform_int_distribution<int> d(200, 6500);
-  std::uniform_real_distribution<double> z01(0.0, 1.0);
-  Image img;
-  img.stride = 2 * static_cast<std::size_t>(w) + pad;
-  img.bytes.assign(img.stride * static_cast<std::size_t>(h), 0x11);  // padding: 0x1111 = 4369 mm, valid
-  for (int v = 0; v < h; ++v)
-    for (int u = 0; u < w; ++u) {
-      const std::uint16_t raw = z01(rng) < zero_fraction ? 0 : static_cast<std::uint16_t>(d(rng));
-      std::memcpy(&img.bytes[static_cast<std::size_t>(v) * img.stride + 2 * static_cast<std::size_t>(u)], &raw, 2);
-    }
-  return img;
-}
-
-Image make_color(int w, int h, int channels, std::size_t pad, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_int_distribution<int> c(0, 255);
-  Image img;
-  img.stride = static_cast<std::size_t>(channels) * w + pad;
-  img.bytes.assign(img.stride * static_cast<std::size_t>(h), 0xEE);
-  for (int v = 0; v < h; ++v)
-    for (int k = 0; k < channels * w; ++k) img.bytes[static_cast<std::size_t>(v) * img.stride + k] = static_cast<std::uint8_t>(c(rng));
-  return img;
-}
-
-SensorFrame make_frame(const Image& depth, int w, int h, const Image* color, int channels, bool bgr,
-                       const Eigen::Isometry3f& T, bool pass_stride = true) {
-  SensorFrame f;
-  f.depth.data = depth.bytes.data();
-  f.depth.width = w;
-  f.depth.height = h;
-  f.depth.row_stride_bytes = pass_stride ? depth.stride : 0;
-  f.depth.format = DepthFormat::kU16;
-  f.depth.depth_units_per_m = 1000.0f;
-  if (color) {
-    f.color.data = color->bytes.data();
-    f.color.width = w;
-    f.color.height = h;
-    f.color.row_stride_bytes = pass_stride ? color->stride : 0;
-    f.color.channels = channels;
-    f.color.bgr = bgr;
-  }
-  f.intrinsics.width = w;
-  f.intrinsics.height = h;
-  f.intrinsics.fx = 530.5f;
-  f.intrinsics.fy = 528.25f;
-  f.intrinsics.cx = static_cast<float>(w) / 2.0f - 0.3f;
-  f.intrinsics.cy = static_cast<float>(h) / 2.0f + 0.7f;
-  f.T_robot_camera = T;
-  return f;
-}
-
-PointCloud run(const std::vector<SensorFrame>& frames, const BackProjectionSettings& s,
-               std::vector<std::size_t>* offsets = nullptr) {
-  PointCloud out;
-  back_project(std::span<const SensorFrame>(frames), s, out, offsets);
-  return out;
-}
 
 // ---- tests -----------------------------------------------------------------------------------------
 
@@ -552,68 +488,5 @@ TEST(BackProjection, BadInputThrowsInvalidArgumentWithUsefulMessage) {
 }
 
 
-// Back-projected once (back_project_camera) and transformed (transform_points), the points are
-// back_project()'s bit for bit, with each point's pixel; on a real Kinect frame as two sensors
-// and on random frames with padding, holes and a pixel step.
-TEST(BackProjection, CameraPointsTransformedAreBackProjectBitForBit) {
-  std::vector<std::vector<SensorFrame>> cases;
-  const int w = 37, h = 23;
-  const Image a = make_u16_depth(w, h, 6, 31, 0.3), b = make_u16_depth(w, h, 0, 32, 0.0);
-  const Image ca = make_color(w, h, 3, 2, 33);
-  cases.push_back({make_frame(a, w, h, &ca, 3, true, test::paper_sensor1()), make_frame(b, w, h, nullptr, 3, false, test::paper_sensor2())});
-  test::RgbdFrame rf;
-  if (std::filesystem::exists(std::filesystem::path(DUET_DATA_DIR) / "rgbd/slambook2_ch5/depth/1.pgm")) {
-    rf = test::load_slambook_frame(1);
-    SensorFrame f1 = test::slambook_sensor_frame(rf), f2 = f1;
-    f1.T_robot_camera = test::paper_sensor1();
-    f2.T_robot_camera = test::paper_sensor2();
-    cases.push_back({f1, f2});
-  }
-  for (const auto& frames : cases)
-    for (const int step : {1, 2, 5}) {
-      SCOPED_TRACE(step);
-      BackProjectionSettings s;
-      s.pixel_step = step;
-      std::vector<std::size_t> off;
-      const PointCloud ref = run(frames, s, &off);
-      CameraPoints cam;
-      back_project_camera(frames, s, cam);
-      EXPECT_EQ(cam.offsets, off);
-      EXPECT_EQ(cam.pixel_step, step);
-      ASSERT_EQ(cam.cloud.size(), ref.size());
-      ASSERT_EQ(cam.pixel.size(), ref.size());
-      std::vector<Eigen::Vector3f> moved(cam.cloud.size());
-      for (std::size_t i = 0; i < frames.size(); ++i)
-        transform_points(cam.cloud.points.data() + off[i], off[i + 1] - off[i], frames[i].T_robot_camera, moved.data() + off[i]);
-      for (std::size_t k = 0; k < ref.size(); ++k) {
-        ASSERT_EQ(std::memcmp(moved[k].data(), ref.points[k].data(), sizeof(float) * 3), 0) << k;
-        ASSERT_EQ(cam.cloud.colors[k], ref.colors[k]) << k;
-      }
-      // Each point's pixel: on the step's lattice, ascending within a frame, and its camera-frame
-      // z is that pixel's depth.
-      for (std::size_t i = 0; i < frames.size(); ++i) {
-        const SensorFrame& f = frames[i];
-        for (std::size_t k = off[i]; k < off[i + 1]; ++k) {
-          const std::uint32_t u = cam.pixel[k] % static_cast<std::uint32_t>(f.depth.width), v = cam.pixel[k] / static_cast<std::uint32_t>(f.depth.width);
-          ASSERT_EQ(u % static_cast<std::uint32_t>(step), 0u);
-          ASSERT_EQ(v % static_cast<std::uint32_t>(step), 0u);
-          if (k > off[i]) ASSERT_GT(cam.pixel[k], cam.pixel[k - 1]);
-          std::uint16_t raw;
-          const std::size_t stride = f.depth.row_stride_bytes ? f.depth.row_stride_bytes : 2 * static_cast<std::size_t>(f.depth.width);
-          std::memcpy(&raw, static_cast<const std::uint8_t*>(f.depth.data) + v * stride + 2 * u, 2);
-          ASSERT_EQ(cam.cloud.points[k].z(), static_cast<float>(raw) / f.depth.depth_units_per_m);
-        }
-      }
-    }
-  // Nothing in, nothing out; in place works.
-  CameraPoints none;
-  back_project_camera({}, {}, none);
-  EXPECT_EQ(none.cloud.size(), 0u);
-  EXPECT_EQ(none.offsets, (std::vector<std::size_t>{0}));
-  std::vector<Eigen::Vector3f> p{{1.0f, 2.0f, 3.0f}};
-  transform_points(p.data(), 1, test::paper_sensor1(), p.data());
-  EXPECT_TRUE(p[0].isApprox(test::paper_sensor1() * Eigen::Vector3f(1.0f, 2.0f, 3.0f)));
-  transform_points(nullptr, 0, test::paper_sensor1(), nullptr);
-}
 }  // namespace
 }  // namespace duet

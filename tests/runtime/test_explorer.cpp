@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include "half_known_room.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -15,21 +17,10 @@
 
 namespace {
 
-constexpr float kRes = 0.05f;
+constexpr float kRes = duet_test::kRoomRes;
 
-// 5 x 3 m: known free for x < 4 m, never observed (NaN) beyond - one straight frontier.
-duet::OccupancyGrid half_known_room() {
-  duet::OccupancyGrid g(kRes, Eigen::Vector2f(0.0f, 0.0f), 100, 60);
-  for (int y = 0; y < g.height(); ++y)
-    for (int x = 0; x < 80; ++x) g.logodds()[g.index(x, y)] = -2.0f;
-  return g;
-}
-
-duet::Profile frontier_only_profile() {
-  duet::Profile p = duet::builtin_profile("dual_kinect_kobuki");
-  p.exploration.strategy.use_simulation = false;  // the frontier goal: a cell that borders unknown space
-  return p;
-}
+using duet_test::frontier_only_profile;
+using duet_test::half_known_room;
 
 float needed_clearance(const duet::Profile& p) {
   return p.exploration.dwa.robot_radius_m + p.exploration.dwa.safety_margin_m;

@@ -11,27 +11,16 @@
 
 #include <gtest/gtest.h>
 
+#include "half_known_room.hpp"
+
 #include <memory>
 #include <string>
 #include <vector>
 
 namespace {
 
-constexpr float kRes = 0.05f;
-
-// 5 x 3 m: known free for x < 4 m, never observed beyond - one straight frontier.
-duet::OccupancyGrid half_known_room() {
-  duet::OccupancyGrid g(kRes, Eigen::Vector2f(0.0f, 0.0f), 100, 60);
-  for (int y = 0; y < g.height(); ++y)
-    for (int x = 0; x < 80; ++x) g.logodds()[g.index(x, y)] = -2.0f;
-  return g;
-}
-
-duet::Profile frontier_only_profile() {
-  duet::Profile p = duet::builtin_profile("dual_kinect_kobuki");
-  p.exploration.strategy.use_simulation = false;
-  return p;
-}
+using duet_test::frontier_only_profile;
+using duet_test::half_known_room;
 
 /// A strategy that proposes a fixed goal (or nothing) and records what it is told.
 class Scripted final : public duet::GoalStrategy {

@@ -34,24 +34,19 @@ void Mapper::integrate(const CameraPoints& points, std::span<const SensorFrame> 
     fail(ErrorCode::kInvalidArgument, "Mapper::integrate: the points were sampled every " + std::to_string(points.pixel_step) +
                                           " pixels, the mapping settings say " + std::to_string(settings_.back_projection.pixel_step));
   const Eigen::Isometry3f T_map_robot = T_map_world_ * T_world_robot;
-  std::vector<SensorFrame> in_map(frames.begin(), frames.end());
-  for (auto& f : in_map) f.T_robot_camera = T_map_robot * f.T_robot_camera;  // optical -> map
-  raw_.clear();
-  raw_.points.resize(points.cloud.size());
-  raw_.colors = points.cloud.colors;
-  offsets_ = points.offsets;
-  for (std::size_t i = 0; i < in_map.size(); ++i)
-    transform_points(points.cloud.points.data() + offsets_[i], offsets_[i + 1] - offsets_[i], in_map[i].T_robot_camera,
-                     raw_.points.data() + offsets_[i]);
-  stats_.raw_points += raw_.size();
+  const std::vector<std::size_t>& off = points.offsets;
+  stats_.raw_points += points.cloud.size();
   obstacles_.clear();
-  for (std::size_t i = 0; i < in_map.size(); ++i) {
-    const std::size_t b = offsets_[i], n = offsets_[i + 1] - b;
-    const PointsView pts = n ? PointsView(raw_.points[b].data(), n) : PointsView();
-    const ColorsView col = n ? ColorsView(&raw_.colors[b].r, n) : ColorsView();
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const Eigen::Isometry3f T_map_camera = T_map_robot * frames[i].T_robot_camera;  // optical -> map
+    const std::size_t b = off[i], n = off[i + 1] - b;
+    map_points_.resize(n);
+    transform_points(points.cloud.points.data() + b, n, T_map_camera, map_points_.data());
+    const PointsView pts = n ? PointsView(map_points_[0].data(), n) : PointsView();
+    const ColorsView col = n ? ColorsView(&points.cloud.colors[b].r, n) : ColorsView();
     voxel_filter(pts, col, settings_.voxel_filter, vf_ws_, filtered_);
     stats_.filtered_points += filtered_.size();
-    const Eigen::Vector3f origin = in_map[i].T_robot_camera.translation();
+    const Eigen::Vector3f origin = T_map_camera.translation();
     NormalSettings ns = settings_.normals;
     ns.viewpoint = origin;
     estimate_normals(filtered_, ns);

@@ -187,7 +187,8 @@ void Navigator::update_map(const OccupancyGrid& grid, const Pose2& robot, double
     map = &contact_grid_;
   }
   inflate(GridView(*map), profile_.exploration.inflation, inflated_);
-  for (std::size_t i = 0; i < strategies_.size(); ++i) strategies_[i]->map_updated(latest_map(), i == active_);
+  const GridView latest = latest_map();
+  for (std::size_t i = 0; i < strategies_.size(); ++i) strategies_[i]->map_updated(latest, i == active_);
   // The dynamic window's grid: unknown is an obstacle, except where the robot's body has been;
   // the recent obstacles block (ExplorerSettings::recent_obstacles_s) - only here: where the
   // pose has moved since a place was mapped, the map's copy of a wall and the recent one narrow

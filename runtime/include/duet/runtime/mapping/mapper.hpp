@@ -101,10 +101,10 @@ class Mapper {
   bool cloud_dirty_ = false;  // submaps: global_ is out of date
   // Reused scratch.
   CameraPoints camera_;
-  PointCloud raw_, filtered_;
+  std::vector<Eigen::Vector3f> map_points_;  ///< one frame's points in the map frame
+  PointCloud filtered_;
   std::vector<PointLabel> labels_;
   std::vector<Eigen::Vector2f> obstacles_;
-  std::vector<std::size_t> offsets_;
   VoxelFilterWorkspace vf_ws_;
   GridUpdateWorkspace grid_ws_;
 };
