@@ -12,17 +12,11 @@
 namespace duet {
 
 namespace {
-/// Calls fn(log-odds) for every cell of `g` whose centre is within r of p.
-template <class F>
-void for_each_cell_in_disc(OccupancyGrid& g, const Eigen::Vector2f& p, float r, F&& fn) {
-  const int rc = static_cast<int>(std::ceil(r / g.resolution()));
-  const Eigen::Vector2i c = g.cell_of(p);
-  for (int dy = -rc; dy <= rc; ++dy)
-    for (int dx = -rc; dx <= rc; ++dx) {
-      const int x = c.x() + dx, y = c.y() + dy;
-      if (!g.in_bounds(x, y) || (g.cell_center(x, y) - p).norm() > r) continue;
-      fn(g.logodds()[g.index(x, y)]);
-    }
+/// The dynamic window's inflation: unknown cells are obstacles (an RGB-D sensor sees nothing
+/// nearer than its minimum range: driving into unknown space near the robot is driving blind).
+InflationSettings local_inflation(InflationSettings s) {
+  s.unknown_is_obstacle = true;
+  return s;
 }
 
 bool same_geometry(const GridView& a, const GridView& b) {
@@ -46,7 +40,21 @@ Navigator::Navigator(const Profile& profile, const ExplorerSettings& settings)
 
 Navigator::Navigator(const Profile& profile, const ExplorerSettings& settings, std::vector<std::unique_ptr<GoalStrategy>> strategies)
     : profile_(profile), settings_(settings), sectors_(observation_sectors(profile)), model_(profile.exploration.observation),
+      planning_costmap_(profile.exploration.inflation, {}),
+      local_costmap_(local_inflation(profile.exploration.inflation), {}),
       strategies_(std::move(strategies)) {
+  const float occupied = std::max(profile_.exploration.cells.occupied_logodds, profile_.mapping.grid_update.max_logodds);
+  const float free = std::min(profile_.exploration.cells.free_logodds, profile_.mapping.grid_update.min_logodds);
+  auto contacts = std::make_unique<ContactLayer>(settings_.contact_radius_m, occupied);
+  auto recent = std::make_unique<RecentObstacleLayer>(profile_.exploration.cells.occupied_logodds, occupied);
+  auto trail = std::make_unique<TrailLayer>(profile_.chassis.radius_m,
+                                            profile_.exploration.dwa.robot_radius_m + profile_.exploration.dwa.safety_margin_m, free);
+  contacts_ = contacts.get();
+  recent_ = recent.get();
+  trail_ = trail.get();
+  planning_costmap_.add(std::move(contacts));
+  local_costmap_.add(std::move(recent));
+  local_costmap_.add(std::move(trail));
   if (strategies_.empty()) fail(ErrorCode::kInvalidArgument, "Navigator: no goal strategy");
   for (const auto& st : strategies_)
     if (!st) fail(ErrorCode::kInvalidArgument, "Navigator: a goal strategy is null");
@@ -73,7 +81,7 @@ NavPlanView Navigator::view() const {
   static_cast<NavPlanState&>(v) = plan_state();
   v.goal = goal_ ? &*goal_ : nullptr;
   v.path = path_;
-  v.local = &local_;
+  v.local = &local_grid();
   v.planning = &planning_grid();
   return v;
 }
@@ -85,17 +93,19 @@ NavSnapshot Navigator::snapshot() const {
   s.stop_detail = stop_detail_;
   s.goal = goal_;
   s.path = path_;
-  s.local = local_;
+  s.local = local_grid();
   s.planning = planning_grid();
   return s;
 }
 
-void Navigator::add_trail(const Eigen::Vector2f& here) {
-  if (here.allFinite() && (trail_.empty() || (trail_.back() - here).norm() >= 0.05f)) trail_.push_back(here);
+void Navigator::add_trail(const Eigen::Vector2f& here) { trail_->add(here); }
+
+void Navigator::add_layer(CostmapKind costmap, std::unique_ptr<CostmapLayer> layer) {
+  (costmap == CostmapKind::kPlanning ? planning_costmap_ : local_costmap_).add(std::move(layer));
 }
 
 void Navigator::stall(const Eigen::Vector2f& contact, double now_s) {
-  contacts_.push_back(contact);
+  contacts_->add(contact);
   ++stats_.stalls;
   if (goal_) abandon_goal(stats_.goals_abandoned_stuck, now_s);
   wait_for_map_ = true;  // decide again once the grids hold the contact
@@ -119,52 +129,16 @@ void Navigator::abandon(std::uint64_t goal_id, AbandonReason why, double now_s) 
   abandon_goal(why == AbandonReason::kTimeout ? stats_.goals_abandoned_timeout : stats_.goals_abandoned_stuck, now_s);
 }
 
-void Navigator::mark_contacts(OccupancyGrid& g) const {
-  const float occ = std::max(profile_.exploration.cells.occupied_logodds, profile_.mapping.grid_update.max_logodds);
-  for (const Eigen::Vector2f& p : contacts_) for_each_cell_in_disc(g, p, settings_.contact_radius_m, [&](float& l) { l = occ; });
-}
-
-void Navigator::set_recent_obstacles(std::span<const Eigen::Vector2f> points) {
-  recent_.clear();
-  for (const Eigen::Vector2f& p : points)
-    if (p.allFinite()) recent_.push_back(p);
-}
-
-void Navigator::mark_recent(OccupancyGrid& g) {
-  const float occ = std::max(profile_.exploration.cells.occupied_logodds, profile_.mapping.grid_update.max_logodds);
-  const float occupied = profile_.exploration.cells.occupied_logodds;
-  // Decided on the map as given (before any cell is marked here): a cell within one cell of an
-  // obstacle of the map adds nothing the inflation's margin (a cell) does not already hold, and
-  // marking it would only thicken walls by the sensors' noise.
-  recent_cells_.clear();
-  for (const Eigen::Vector2f& p : recent_) {
-    const Eigen::Vector2i c = g.cell_of(p);
-    if (!g.in_bounds(c.x(), c.y())) continue;
-    bool near_map_obstacle = false;
-    for (int dy = -1; dy <= 1 && !near_map_obstacle; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const int x = c.x() + dx, y = c.y() + dy;
-        if (g.in_bounds(x, y) && g.logodds()[g.index(x, y)] >= occupied) {
-          near_map_obstacle = true;
-          break;
-        }
-      }
-    if (!near_map_obstacle) recent_cells_.push_back(g.index(c.x(), c.y()));
-  }
-  std::sort(recent_cells_.begin(), recent_cells_.end());
-  recent_cells_.erase(std::unique(recent_cells_.begin(), recent_cells_.end()), recent_cells_.end());
-  for (const std::size_t i : recent_cells_) g.logodds()[i] = occ;
-  stats_.recent_obstacle_cells += recent_cells_.size();
-}
-
+void Navigator::set_recent_obstacles(std::span<const Eigen::Vector2f> points) { recent_->set(points); }
 
 void Navigator::shift(const Pose2& D) {
   if (!(std::isfinite(D.x) && std::isfinite(D.y) && std::isfinite(D.theta)))
     fail(ErrorCode::kInvalidArgument, "Navigator::shift: the shift is not finite");
   auto move = [&](Eigen::Vector2f& p) { p = transform_point(D, p); };
-  for (auto* v : {&trail_, &contacts_, &recent_, &path_})
-    for (Eigen::Vector2f& p : *v) move(p);
+  for (Eigen::Vector2f& p : path_) move(p);
   move(goal_target_);
+  planning_costmap_.shift(D);
+  local_costmap_.shift(D);
   for (const auto& st : strategies_) st->shift(D);
   if (goal_) goal_ = compose(D, *goal_);
 }
@@ -179,41 +153,14 @@ void Navigator::update_map(const OccupancyGrid& grid, const Pose2& robot, double
     model_geometry_valid_ = true;
   }
   // Planning and driving see the contact obstacles too (the observation model keeps the map).
-  const OccupancyGrid* map = &grid;
-  marked_ = !contacts_.empty();
-  if (marked_) {
-    contact_grid_ = grid;
-    mark_contacts(contact_grid_);
-    map = &contact_grid_;
-  }
-  inflate(GridView(*map), profile_.exploration.inflation, inflated_);
+  const OccupancyGrid& planning_map = planning_costmap_.update(grid);
   const GridView latest = latest_map();
   for (std::size_t i = 0; i < strategies_.size(); ++i) strategies_[i]->map_updated(latest, i == active_);
-  // The dynamic window's grid: unknown is an obstacle, except where the robot's body has been;
-  // the recent obstacles block (ExplorerSettings::recent_obstacles_s) - only here: where the
-  // pose has moved since a place was mapped, the map's copy of a wall and the recent one narrow
-  // a door between them, and planning on both can close doors for good (every frontier
-  // unreachable; bench/RESULTS.md has the run).
-  local_grid_ = *map;
-  if (!recent_.empty()) mark_recent(local_grid_);
-  const float free_l = std::min(profile_.exploration.cells.free_logodds, profile_.mapping.grid_update.min_logodds);
-  const float res = local_grid_.resolution();
-  auto clear_disc = [&](const Eigen::Vector2f& p, float r) {
-    for_each_cell_in_disc(local_grid_, p, r, [&](float& l) {
-      if (std::isnan(l)) l = free_l;
-    });
-  };
-  // The body's trail is free; so is the spot the robot was set down on, out to the dynamic
-  // window's footprint plus a cell (a robot is placed on free floor).
-  // Only cells wholly under the body (centre within radius - half a cell diagonal): an unseen
-  // obstacle corner at the body's edge must stay an obstacle, or the trail creeps into it.
-  const float body_cells_r = profile_.chassis.radius_m - 0.7072f * res;
-  for (const Eigen::Vector2f& p : trail_) clear_disc(p, body_cells_r);
-  if (!trail_.empty())
-    clear_disc(trail_.front(), profile_.exploration.dwa.robot_radius_m + profile_.exploration.dwa.safety_margin_m + res);
-  InflationSettings local_settings = profile_.exploration.inflation;
-  local_settings.unknown_is_obstacle = true;
-  inflate(GridView(local_grid_), local_settings, local_);
+  // The recent obstacles block only the dynamic window: where the pose has moved since a place
+  // was mapped, the map's copy of a wall and the recent one narrow a door between them, and
+  // planning on both can close doors for good (every frontier unreachable; bench/RESULTS.md).
+  (void)local_costmap_.update(planning_map);
+  if (recent_->active()) stats_.recent_obstacle_cells += recent_->cells_marked();
   have_map_ = true;
   if (state_ == ExplorerState::kIdle) state_ = ExplorerState::kExploring;
   wait_for_map_ = false;  // a decision that found nothing may try again on the new map
@@ -230,14 +177,16 @@ void Navigator::update_map(const OccupancyGrid& grid, const Pose2& robot, double
   }
 }
 
-GridView Navigator::latest_map() const { return marked_ ? GridView(contact_grid_) : model_.grid(); }
+GridView Navigator::latest_map() const {
+  return planning_costmap_.layered() ? GridView(planning_costmap_.grid()) : model_.grid();
+}
 
 GoalStrategy* Navigator::active() const { return active_ < strategies_.size() ? strategies_[active_].get() : nullptr; }
 
 const InflatedGrid& Navigator::planning_grid() const noexcept {
   const GoalStrategy* by = active();
   const InflatedGrid* own = by ? by->planning_grid() : nullptr;
-  return own ? *own : inflated_;
+  return own ? *own : inflated();
 }
 
 bool Navigator::plan(const Pose2& robot) {
@@ -264,24 +213,25 @@ float Navigator::dwa_clearance() const {
 
 bool Navigator::can_stand_on(int x, int y) const {
   const InflatedGrid& g = planning_grid();
-  if (!g.in_bounds(x, y) || !local_.in_bounds(x, y)) return false;
-  return g.traversable[g.index(x, y)] != 0 && local_.clearance_m[local_.index(x, y)] > dwa_clearance();
+  if (!g.in_bounds(x, y) || !local_grid().in_bounds(x, y)) return false;
+  const InflatedGrid& local = local_grid();
+  return g.traversable[g.index(x, y)] != 0 && local.clearance_m[local.index(x, y)] > dwa_clearance();
 }
 
 std::optional<Eigen::Vector2f> Navigator::standoff(const Eigen::Vector2f& target) const {
-  const Eigen::Vector2i c = inflated_.cell_of(target);
+  const Eigen::Vector2i c = inflated().cell_of(target);
   if (can_stand_on(c.x(), c.y())) return target;
   // The nearest fitting cell centre by distance to the target (ties: the lower row, then column,
   // so the result is deterministic).
   const float r = settings_.goal_standoff_search_m;
-  const int rc = static_cast<int>(std::ceil(r / inflated_.resolution_m));
+  const int rc = static_cast<int>(std::ceil(r / inflated().resolution_m));
   std::optional<Eigen::Vector2f> best;
   float best_d = std::numeric_limits<float>::infinity();
   for (int dy = -rc; dy <= rc; ++dy)
     for (int dx = -rc; dx <= rc; ++dx) {
       const int x = c.x() + dx, y = c.y() + dy;
       if (!can_stand_on(x, y)) continue;
-      const Eigen::Vector2f p = inflated_.cell_center(inflated_.index(x, y));
+      const Eigen::Vector2f p = inflated().cell_center(inflated().index(x, y));
       const float d = (p - target).norm();
       if (d <= r && d < best_d) {
         best_d = d;
@@ -292,7 +242,7 @@ std::optional<Eigen::Vector2f> Navigator::standoff(const Eigen::Vector2f& target
 }
 
 bool Navigator::recheck_goal() {
-  const Eigen::Vector2i c = inflated_.cell_of(Eigen::Vector2f(goal_->x, goal_->y));
+  const Eigen::Vector2i c = inflated().cell_of(Eigen::Vector2f(goal_->x, goal_->y));
   if (can_stand_on(c.x(), c.y())) return true;  // still fits
   const auto p = standoff(goal_target_);
   if (!p) return false;
@@ -338,7 +288,7 @@ void Navigator::decide(const Pose2& robot, double now_s) {
   // Up to three attempts in one period: a goal without a path is blacklisted and the next one taken.
   for (int attempt = 0; attempt < 3 && !goal_; ++attempt) {
     active_ = kNone;
-    GoalQuery q{robot, now_s, model_, latest_map(), inflated_, sectors_, blacklist_, decision_, log_, frontier_xy_, stats_,
+    GoalQuery q{robot, now_s, model_, latest_map(), inflated(), sectors_, blacklist_, decision_, log_, frontier_xy_, stats_,
                 [this](int x, int y) { return can_stand_on(x, y); }};
     std::optional<GoalProposal> proposal;
     for (std::size_t i = 0; i < strategies_.size() && !proposal && !q.retry; ++i) {
@@ -389,7 +339,7 @@ void Navigator::finish(const Pose2& robot, double now_s) {
     case ExplorationStatus::kRobotBlocked: stop_detail_ = "gave up: the robot is blocked (no traversable cell around it)"; break;
     default: stop_detail_ = std::string("stopped: ") + to_string(stop_status_); break;
   }
-  if (settings_.on_done != OnDone::kReturnHome || trail_.empty()) {
+  if (settings_.on_done != OnDone::kReturnHome || trail_->points().empty()) {
     state_ = ExplorerState::kDone;
     return;
   }
@@ -407,7 +357,7 @@ bool Navigator::plan_home(const Pose2& robot, double now_s) {
   // the robot is), each at a later map update.
   constexpr int kHomeAttempts = 3;
   if (++home_attempts_ > kHomeAttempts) return false;
-  const Eigen::Vector2f home = trail_.front();
+  const Eigen::Vector2f home = trail_->points().front();
   goal_ = Pose2{home.x(), home.y(), robot.theta};
   goal_target_ = home;
   active_ = kNone;

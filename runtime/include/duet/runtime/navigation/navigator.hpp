@@ -7,11 +7,10 @@
 /// Controller on the control thread.
 ///
 /// Costmaps (update_map(), at the map rate): the observation model of the map (Procedure 1's
-/// reward), the planning grid (the map with the contact obstacles, inflated), the dynamic
-/// window's grid (unknown cells are obstacles - an RGB-D sensor sees nothing nearer than its
-/// minimum range, so driving into unknown space near the robot is driving blind - except under
-/// the body's trail and at the start; the recent obstacles block) and, while a relaxed goal is
-/// active, the relaxed grid.
+/// reward) and two layered costmaps (costmap_layer.hpp): the planning costmap (the map with the
+/// contact obstacles, inflated) and the dynamic window's (the planning costmap's grid with the
+/// recent obstacles and the body's trail, inflated with unknown cells as obstacles); a goal
+/// strategy may keep a grid of its own (the relaxed grid while a relaxed goal is active).
 ///
 /// Goal life cycle (the paper: "a new goal when the last is reached or its time limit passes"):
 ///  - decide() takes a decision when there is no goal: it asks its goal strategies in order
@@ -35,8 +34,12 @@
 #include <duet/kernels/observation.hpp>
 #include <duet/kernels/path.hpp>
 #include <duet/runtime/config/profile.hpp>
+#include <duet/runtime/navigation/contact_layer.hpp>
+#include <duet/runtime/navigation/costmap_layer.hpp>
 #include <duet/runtime/navigation/explorer_settings.hpp>
 #include <duet/runtime/navigation/goal_strategy.hpp>
+#include <duet/runtime/navigation/recent_obstacle_layer.hpp>
+#include <duet/runtime/navigation/trail_layer.hpp>
 #include <duet/runtime/robot/latency.hpp>
 
 #include <cstdint>
@@ -78,6 +81,12 @@ struct NavSnapshot : NavPlanState {
   [[nodiscard]] NavPlanView view() const;
 };
 
+/// The Navigator's two costmaps.
+enum class CostmapKind {
+  kPlanning,  ///< paths are planned on it (and strategies see its grid as the latest map)
+  kLocal,     ///< the dynamic window drives on it
+};
+
 /// Why the controller gave a goal up.
 enum class AbandonReason { kTimeout, kStuck };
 
@@ -96,6 +105,9 @@ class Navigator {
   void set_recent_obstacles(std::span<const Eigen::Vector2f> points);
   /// A robot position (map frame): the body's trail (kept 0.05 m apart) is free in the local grid.
   void add_trail(const Eigen::Vector2f& p);
+  /// Appends a caller's layer to one of the costmaps, after its default layers (e.g. keep-out
+  /// zones); it applies from the next update_map() on and moves with shift().
+  void add_layer(CostmapKind costmap, std::unique_ptr<CostmapLayer> layer);
 
   // Events from the controller; `goal_id` names the goal they are about (ignored if it is no longer the current one).
   void goal_reached(std::uint64_t goal_id, double now_s);
@@ -119,12 +131,15 @@ class Navigator {
   [[nodiscard]] const ExplorerStats& stats() const noexcept { return stats_; }
   [[nodiscard]] const std::optional<Pose2>& goal() const noexcept { return goal_; }
   [[nodiscard]] const std::vector<Eigen::Vector2f>& path() const noexcept { return path_; }
-  [[nodiscard]] const InflatedGrid& inflated() const noexcept { return inflated_; }
+  [[nodiscard]] const InflatedGrid& inflated() const noexcept { return planning_costmap_.inflated(); }
   /// The grid paths are planned on: the goal's strategy's own (a relaxed grid), else inflated().
   [[nodiscard]] const InflatedGrid& planning_grid() const noexcept;
-  [[nodiscard]] const InflatedGrid& local_grid() const noexcept { return local_; }
-  [[nodiscard]] const std::vector<Eigen::Vector2f>& contacts() const noexcept { return contacts_; }
-  [[nodiscard]] const std::vector<Eigen::Vector2f>& recent_obstacles() const noexcept { return recent_; }
+  [[nodiscard]] const InflatedGrid& local_grid() const noexcept { return local_costmap_.inflated(); }
+  [[nodiscard]] const LayeredCostmap& costmap(CostmapKind which) const noexcept {
+    return which == CostmapKind::kPlanning ? planning_costmap_ : local_costmap_;
+  }
+  [[nodiscard]] const std::vector<Eigen::Vector2f>& contacts() const noexcept { return contacts_->points(); }
+  [[nodiscard]] const std::vector<Eigen::Vector2f>& recent_obstacles() const noexcept { return recent_->points(); }
   [[nodiscard]] const ExplorationDecision& last_decision() const noexcept { return decision_; }
   [[nodiscard]] const std::vector<DecisionRecord>& decisions() const noexcept { return log_; }
   [[nodiscard]] const std::vector<Eigen::Vector2f>& frontier_points() const noexcept { return frontier_xy_; }
@@ -134,8 +149,6 @@ class Navigator {
   [[nodiscard]] const LatencyStats& decide_latency() const noexcept { return decide_latency_; }
 
  private:
-  void mark_contacts(OccupancyGrid& g) const;
-  void mark_recent(OccupancyGrid& g);
   bool plan(const Pose2& robot);
   void abandon_goal(int& counter, double now_s);
   [[nodiscard]] GridView latest_map() const;
@@ -155,15 +168,11 @@ class Navigator {
   ExplorerSettings settings_;
   std::vector<SensorSector> sectors_;
   ObservationModel model_;
-  InflatedGrid inflated_;
-  InflatedGrid local_;
-  OccupancyGrid local_grid_{0.05f};
-  std::vector<Eigen::Vector2f> trail_;
-  std::vector<Eigen::Vector2f> contacts_;
-  std::vector<Eigen::Vector2f> recent_;
-  std::vector<std::size_t> recent_cells_;
-  OccupancyGrid contact_grid_{0.05f};
-  bool marked_ = false;
+  LayeredCostmap planning_costmap_;
+  LayeredCostmap local_costmap_;
+  ContactLayer* contacts_ = nullptr;       ///< the default layers (owned by the costmaps)
+  RecentObstacleLayer* recent_ = nullptr;
+  TrailLayer* trail_ = nullptr;
   GoalBlacklist blacklist_;
   std::vector<std::unique_ptr<GoalStrategy>> strategies_;
   static constexpr std::size_t kNone = static_cast<std::size_t>(-1);

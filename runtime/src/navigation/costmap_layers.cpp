@@ -1,0 +1,96 @@
+/// @file costmap_layers.cpp
+/// The Navigator's costmap layers (contact_layer.hpp, recent_obstacle_layer.hpp, trail_layer.hpp).
+#include <duet/kernels/motion_model.hpp>
+#include <duet/runtime/navigation/contact_layer.hpp>
+#include <duet/runtime/navigation/recent_obstacle_layer.hpp>
+#include <duet/runtime/navigation/trail_layer.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace duet {
+
+namespace {
+/// Calls fn(log-odds) for every cell of `g` whose centre is within r of p.
+template <class F>
+void for_each_cell_in_disc(OccupancyGrid& g, const Eigen::Vector2f& p, float r, F&& fn) {
+  const int rc = static_cast<int>(std::ceil(r / g.resolution()));
+  const Eigen::Vector2i c = g.cell_of(p);
+  for (int dy = -rc; dy <= rc; ++dy)
+    for (int dx = -rc; dx <= rc; ++dx) {
+      const int x = c.x() + dx, y = c.y() + dy;
+      if (!g.in_bounds(x, y) || (g.cell_center(x, y) - p).norm() > r) continue;
+      fn(g.logodds()[g.index(x, y)]);
+    }
+}
+
+void shift_points(std::vector<Eigen::Vector2f>& points, const Pose2& D) {
+  for (Eigen::Vector2f& p : points) p = transform_point(D, p);
+}
+}  // namespace
+
+// ---- ContactLayer ---------------------------------------------------------------------------
+
+void ContactLayer::add(const Eigen::Vector2f& p) {
+  if (p.allFinite()) points_.push_back(p);
+}
+
+void ContactLayer::apply(OccupancyGrid& grid) {
+  for (const Eigen::Vector2f& p : points_) for_each_cell_in_disc(grid, p, radius_m_, [&](float& l) { l = occupied_; });
+}
+
+void ContactLayer::shift(const Pose2& D) { shift_points(points_, D); }
+
+// ---- RecentObstacleLayer --------------------------------------------------------------------
+
+void RecentObstacleLayer::set(std::span<const Eigen::Vector2f> points) {
+  points_.clear();
+  for (const Eigen::Vector2f& p : points)
+    if (p.allFinite()) points_.push_back(p);
+}
+
+void RecentObstacleLayer::apply(OccupancyGrid& grid) {
+  // Decided on the grid as given, before any cell is marked here.
+  cells_.clear();
+  for (const Eigen::Vector2f& p : points_) {
+    const Eigen::Vector2i c = grid.cell_of(p);
+    if (!grid.in_bounds(c.x(), c.y())) continue;
+    bool near_obstacle = false;
+    for (int dy = -1; dy <= 1 && !near_obstacle; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int x = c.x() + dx, y = c.y() + dy;
+        if (grid.in_bounds(x, y) && grid.logodds()[grid.index(x, y)] >= occupied_) {
+          near_obstacle = true;
+          break;
+        }
+      }
+    if (!near_obstacle) cells_.push_back(grid.index(c.x(), c.y()));
+  }
+  std::sort(cells_.begin(), cells_.end());
+  cells_.erase(std::unique(cells_.begin(), cells_.end()), cells_.end());
+  for (const std::size_t i : cells_) grid.logodds()[i] = marked_;
+}
+
+void RecentObstacleLayer::shift(const Pose2& D) { shift_points(points_, D); }
+
+// ---- TrailLayer -----------------------------------------------------------------------------
+
+void TrailLayer::add(const Eigen::Vector2f& p) {
+  if (p.allFinite() && (points_.empty() || (points_.back() - p).norm() >= spacing_m_)) points_.push_back(p);
+}
+
+void TrailLayer::apply(OccupancyGrid& grid) {
+  auto clear_disc = [&](const Eigen::Vector2f& p, float r) {
+    for_each_cell_in_disc(grid, p, r, [&](float& l) {
+      if (std::isnan(l)) l = free_;
+    });
+  };
+  const float res = grid.resolution();
+  const float body_cells_r = body_radius_m_ - 0.7072f * res;  // half a cell's diagonal
+  for (const Eigen::Vector2f& p : points_) clear_disc(p, body_cells_r);
+  if (!points_.empty()) clear_disc(points_.front(), start_radius_m_ + res);
+}
+
+void TrailLayer::shift(const Pose2& D) { shift_points(points_, D); }
+
+}  // namespace duet
