@@ -3,10 +3,12 @@
 // trajectory, the time-area curve (Fig. 10) and a JSON summary.
 // `duet compare`: dual against single sensors over several seeds, both curves in one PNG.
 #include "commands.hpp"
+#include "stop_signals.hpp"
 
 #include <duet/kernels/error.hpp>
 #include <duet/runtime/io/cloud_io.hpp>
 #include <duet/runtime/io/grid_io.hpp>
+#include <duet/runtime/io/output.hpp>
 #include <duet/runtime/io/plot.hpp>
 #include <duet/runtime/config/profile.hpp>
 #include <duet/sim/sim_explore.hpp>
@@ -20,7 +22,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <string>
 
@@ -195,29 +196,25 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
 }
 
 void write_tum(const std::filesystem::path& path, const std::vector<sim::StampedPose>& traj) {
-  std::ofstream f(path);
-  if (!f) fail(ErrorCode::kIo, path.string() + ": cannot write");
-  f << "# timestamp tx ty tz qx qy qz qw\n";
+  std::string text = "# timestamp tx ty tz qx qy qz qw\n";
   char buf[256];
   for (const auto& p : traj) {
     const double h = 0.5 * p.pose.theta;
     std::snprintf(buf, sizeof buf, "%.3f %.4f %.4f 0 0 0 %.6f %.6f\n", p.t_s, static_cast<double>(p.pose.x),
                   static_cast<double>(p.pose.y), std::sin(h), std::cos(h));
-    f << buf;
+    text += buf;
   }
-  if (!f) fail(ErrorCode::kIo, path.string() + ": write failed");
+  write_text_file(path, text);
 }
 
 void write_curve_csv(const std::filesystem::path& path, const std::vector<sim::CurvePoint>& curve) {
-  std::ofstream f(path);
-  if (!f) fail(ErrorCode::kIo, path.string() + ": cannot write");
-  f << "time_s,explored_area_m2,coverage\n";
+  std::string text = "time_s,explored_area_m2,coverage\n";
   char buf[128];
   for (const auto& c : curve) {
     std::snprintf(buf, sizeof buf, "%.2f,%.3f,%.4f\n", c.t_s, c.area_m2, c.coverage);
-    f << buf;
+    text += buf;
   }
-  if (!f) fail(ErrorCode::kIo, path.string() + ": write failed");
+  write_text_file(path, text);
 }
 
 PlotSeries curve_series(const std::vector<sim::CurvePoint>& curve, std::string label, Rgb8 colour, int width) {
@@ -273,7 +270,7 @@ nlohmann::json run_log(const sim::SimExplore& run) {
 }
 
 void write_outputs(sim::SimExplore& run, const std::filesystem::path& out) {
-  std::filesystem::create_directories(out);
+  prepare_output_dir(out);
   const PointCloud& cloud = run.mapper().cloud();
   write_pcd(out / "cloud.pcd", cloud, PcdEncoding::kBinaryCompressed);
   write_ply(out / "cloud.ply", cloud, PlyEncoding::kBinaryLittleEndian);
@@ -294,8 +291,8 @@ void write_outputs(sim::SimExplore& run, const std::filesystem::path& out) {
   po.y_label = "explored area [m^2]";
   po.markers = paper_markers();
   write_plot_png(out / "curve.png", {curve_series(run.curve(), sum.profile, {30, 90, 200}, 2)}, po);
-  std::ofstream(out / "summary.json") << to_json(sum).dump(2) << "\n";
-  std::ofstream(out / "log.json") << run_log(run).dump(1) << "\n";
+  write_text_file(out / "log.json", run_log(run).dump(1) + "\n");
+  write_text_file(out / "summary.json", to_json(sum).dump(2) + "\n");  // last: a summary means a complete folder
 }
 
 void print_progress(const sim::SimExplore& run, bool tty, const char* prefix) {
@@ -303,6 +300,34 @@ void print_progress(const sim::SimExplore& run, bool tty, const char* prefix) {
   std::fprintf(stderr, "%s%st = %6.1f s  area %6.2f m^2  coverage %5.1f %%  goals %d  collisions %zu  %.1fx real time%s",
                tty ? "\r\033[K" : "", prefix, s.sim_time_s, s.explored_area_m2, 100.0 * s.coverage, s.explorer.goals_reached, s.collisions,
                s.wall_time_s > 0.0 ? s.sim_time_s / s.wall_time_s : 0.0, tty ? "" : "\n");
+}
+
+/// Steps `run` to its end with progress on stderr (a terminal: one line updated in place; else a
+/// line every 10 simulated s); a SIGINT or SIGTERM (StopSignals) interrupts it, with a stop
+/// detail "<prefix><signal> at t = <t> s: <saved>". Returns the signal, 0 if none came.
+int run_to_end(sim::SimExplore& run, bool quiet, bool tty, const std::string& prefix, const char* saved) {
+  double next_line = 0.0, next_report = 0.0;
+  auto progress = [&] {
+    if (quiet || (!tty && run.running() && run.now_s() + 1e-9 < next_line)) return;
+    print_progress(run, tty, prefix.c_str());
+    next_line = run.now_s() + 10.0;
+  };
+  int sig = 0;
+  while (run.step()) {
+    if ((sig = StopSignals::received()) != 0) {
+      char why[160];
+      std::snprintf(why, sizeof why, "%s at t = %.1f s: %s", StopSignals::name(sig), run.now_s(), saved);
+      run.interrupt(prefix + why);
+      break;
+    }
+    if (run.now_s() + 1e-9 >= next_report) {
+      progress();
+      next_report += 1.0;
+    }
+  }
+  progress();
+  if (tty) std::fputc('\n', stderr);
+  return sig;
 }
 
 sim::ExploreSettings make_settings(const Profile& profile, std::uint64_t seed, double max_time, double sensor_rate) {
@@ -324,6 +349,8 @@ int run_explore(const ExploreOptions& o) {
   if (!(std::isfinite(o.max_time) && o.max_time > 0.0 && o.max_time <= 1e6))
     fail(ErrorCode::kInvalidArgument, "--max-time must be in (0, 1e6] s, got " + std::to_string(o.max_time));
   const double rate = parse_sensor_rate(o.sensor_rate);
+  const StopSignals signals;  // SIGINT / SIGTERM from here on: stop, save the run so far, say so
+  prepare_output_dir(o.out);  // before the run, not after it
   sim::World world = sim::resolve_world(o.world);
   Profile profile = resolve_profile(o.profile, overlays(o.configs, o.sets));
   apply_strategy(profile, o.strategy);
@@ -343,6 +370,7 @@ int run_explore(const ExploreOptions& o) {
     es.chassis->gyro_noise_density = o.gyro_noise;
   }
   const bool tty = stderr_is_tty() && !o.quiet;
+  int stopped_by = 0;  // the stop signal received, 0 if none
   tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
   arena.execute([&] {
     if (!o.quiet)
@@ -351,93 +379,29 @@ int run_explore(const ExploreOptions& o) {
                    static_cast<unsigned long long>(o.seed), o.max_time, o.realtime ? ", real time" : "",
                    o.true_pose ? ", TRUE POSE (debugging)" : "");
     sim::SimExplore run(std::move(world), std::move(profile), es);
-    double next_line = 0.0;  // not a terminal: a line every 10 simulated s (a terminal: one line, updated in place)
-    run.run([&](const sim::SimExplore& r) {
-      if (o.quiet) return;
-      if (!tty && r.running() && r.now_s() + 1e-9 < next_line) return;
-      print_progress(r, tty, "");
-      next_line = r.now_s() + 10.0;
-    });
-    if (tty) std::fputc('\n', stderr);
+    stopped_by = run_to_end(run, o.quiet, tty, "", "the run so far was saved");
     write_outputs(run, o.out);
     const auto s = run.summary();
-    if (!o.quiet) {
+    if (!o.quiet || stopped_by) {
       std::fprintf(stderr,
-                   "duet explore: stopped (%s%s%s) at %.1f s: %.2f m^2 explored, coverage %.1f %% of %.2f m^2 reachable, "
+                   "duet explore: %s (%s%s%s) at %.1f s: %.2f m^2 explored, coverage %.1f %% of %.2f m^2 reachable, "
                    "%zu collisions, path %.1f m; wrote %s/{cloud.pcd, cloud.ply, grid.yaml, grid.pgm, grid.png, "
-                   "trajectory.tum, trajectory_true.tum, curve.csv, curve.png, summary.json, log.json}\n",
-                   sim::to_string(s.stop_reason), s.stop_detail.empty() ? "" : ": ", s.stop_detail.c_str(),
-                   s.sim_time_s, s.explored_area_m2, 100.0 * s.coverage, s.reachable_free_area_m2, s.collisions,
-                   s.path_length_m, o.out.c_str());
+                   "trajectory.tum, trajectory_true.tum, curve.csv, curve.png, log.json, summary.json}\n",
+                   "stopped", sim::to_string(s.stop_reason), s.stop_detail.empty() ? "" : ": ",
+                   s.stop_detail.c_str(), s.sim_time_s, s.explored_area_m2, 100.0 * s.coverage, s.reachable_free_area_m2,
+                   s.collisions, s.path_length_m, o.out.c_str());
     }
   });
-  return 0;
+  return stopped_by ? StopSignals::exit_code(stopped_by) : 0;
 }
 
-int run_compare(const CompareOptions& o) {
-  if (o.seeds < 1 || o.seeds > 1000) fail(ErrorCode::kInvalidArgument, "--seeds must be in [1, 1000]");
-  const std::vector<std::string> profiles = split_list(o.profiles), strategies = split_list(o.strategies);
-  if (profiles.empty() || strategies.empty()) fail(ErrorCode::kInvalidArgument, "--profiles and --strategies must name at least one each");
-  const std::vector<ProfileOverlay> over = overlays(o.configs, o.sets);
-  for (const auto& st : strategies) {
-    Profile probe = resolve_profile(profiles.front(), over);
-    apply_strategy(probe, st);  // a bad name fails before any run
-  }
-  const sim::World world = sim::resolve_world(o.world);
-  const std::filesystem::path out(o.out);
-  std::filesystem::create_directories(out);
-  tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
-  const bool tty = stderr_is_tty() && !o.quiet;
-  nlohmann::json runs = nlohmann::json::array();
-  std::vector<PlotSeries> series;
-  std::vector<std::string> variants;
-  std::ofstream csv(out / "compare.csv");
-  csv << "variant,profile,strategy,seed,time_s,explored_area_m2,coverage\n";
-  static const Rgb8 kColours[] = {{30, 90, 200}, {220, 120, 20}, {40, 160, 60}, {180, 40, 160}, {120, 120, 120}, {200, 40, 40}};
-  arena.execute([&] {
-    for (const std::string& pname : profiles)
-      for (const std::string& strategy : strategies) {
-        const std::string variant = strategies.size() == 1 ? pname : profiles.size() == 1 ? strategy : pname + "/" + strategy;
-        const Rgb8 colour = kColours[variants.size() % std::size(kColours)];
-        variants.push_back(variant);
-        for (int k = 0; k < o.seeds; ++k) {
-          const std::uint64_t seed = o.first_seed + static_cast<std::uint64_t>(k);
-          Profile profile = resolve_profile(pname, over);
-          apply_strategy(profile, strategy);
-          sim::ExploreSettings es = make_settings(profile, seed, o.max_time, 0.0);
-          sim::SimExplore run(world, std::move(profile), es);
-          const std::string prefix = variant + " seed " + std::to_string(seed) + ": ";
-          double next_line = 0.0;
-          run.run([&](const sim::SimExplore& r) {
-            if (o.quiet || (!tty && r.running() && r.now_s() + 1e-9 < next_line)) return;
-            print_progress(r, tty, prefix.c_str());
-            next_line = r.now_s() + 10.0;
-          });
-          if (tty) std::fputc('\n', stderr);
-          series.push_back(curve_series(run.curve(), k == 0 ? variant : "", colour, 2));
-          for (const auto& c : run.curve()) {
-            char buf[256];
-            std::snprintf(buf, sizeof buf, "%s,%s,%s,%llu,%.2f,%.3f,%.4f\n", variant.c_str(), pname.c_str(), strategy.c_str(),
-                          static_cast<unsigned long long>(seed), c.t_s, c.area_m2, c.coverage);
-            csv << buf;
-          }
-          nlohmann::json r = to_json(run.summary());
-          r["variant"] = variant;
-          r["strategy"] = strategy;
-          runs.push_back(std::move(r));
-        }
-      }
-  });
-  PlotOptions po;
-  po.title = "Time-area curves on " + world.name + " (" + std::to_string(o.seeds) + " seeds each)";
-  po.x_label = "time [s]";
-  po.y_label = "explored area [m^2]";
-  po.markers = paper_markers();
-  write_plot_png(out / "compare.png", series, po);
-  // Means per variant (Explore-Bench's measures): coverage, times to the paper's area and to
-  // 90 % coverage (over the runs that reached them), total time, path length, collisions.
+/// compare.json: every run's summary and the means per variant (Explore-Bench's measures:
+/// coverage, times to the paper's area and to 90 % coverage over the runs that reached them,
+/// total time, path length, collisions); "interrupted" says why a comparison stopped early.
+nlohmann::json compare_json(const std::string& world, const nlohmann::json& runs, const std::vector<std::string>& variants,
+                            const std::string& interrupted) {
   nlohmann::json j;
-  j["world"] = world.name;
+  j["world"] = world;
   j["runs"] = runs;
   for (const std::string& variant : variants) {
     double t31 = 0.0, t90 = 0.0, cov = 0.0, total = 0.0, path = 0.0;
@@ -471,9 +435,81 @@ int run_compare(const CompareOptions& o) {
                           {"runs_reaching_90pct", n90},
                           {"t90_s", n90 ? nlohmann::json(t90 / n90) : nlohmann::json(nullptr)}};
   }
-  std::ofstream(out / "compare.json") << j.dump(2) << "\n";
-  if (!o.quiet) std::fprintf(stderr, "duet compare: wrote %s/{compare.png, compare.csv, compare.json}\n%s\n", o.out.c_str(), j["mean"].dump(2).c_str());
-  return 0;
+  if (!interrupted.empty()) j["interrupted"] = interrupted;
+  return j;
+}
+
+int run_compare(const CompareOptions& o) {
+  if (o.seeds < 1 || o.seeds > 1000) fail(ErrorCode::kInvalidArgument, "--seeds must be in [1, 1000]");
+  const std::vector<std::string> profiles = split_list(o.profiles), strategies = split_list(o.strategies);
+  if (profiles.empty() || strategies.empty()) fail(ErrorCode::kInvalidArgument, "--profiles and --strategies must name at least one each");
+  const std::vector<ProfileOverlay> over = overlays(o.configs, o.sets);
+  for (const auto& st : strategies) {
+    Profile probe = resolve_profile(profiles.front(), over);
+    apply_strategy(probe, st);  // a bad name fails before any run
+  }
+  const std::filesystem::path out(o.out);
+  const StopSignals signals;  // SIGINT / SIGTERM from here on: stop the current run, save the runs so far, say so
+  prepare_output_dir(out);  // before the runs, not after them
+  const sim::World world = sim::resolve_world(o.world);
+  tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
+  const bool tty = stderr_is_tty() && !o.quiet;
+  nlohmann::json runs = nlohmann::json::array();
+  std::vector<PlotSeries> series;
+  std::vector<std::string> variants;
+  std::string csv = "variant,profile,strategy,seed,time_s,explored_area_m2,coverage\n";
+  std::string interrupted;  // why the comparison stopped early ("" if it did not)
+  int stopped_by = 0;
+  static const Rgb8 kColours[] = {{30, 90, 200}, {220, 120, 20}, {40, 160, 60}, {180, 40, 160}, {120, 120, 120}, {200, 40, 40}};
+  // The results so far, rewritten after every run (each file replaced whole): a comparison
+  // stopped at any point - a signal, a kill, a crash - keeps every run it finished.
+  auto write_results = [&] {
+    PlotOptions po;
+    po.title = "Time-area curves on " + world.name + " (" + std::to_string(o.seeds) + " seeds each)";
+    po.x_label = "time [s]";
+    po.y_label = "explored area [m^2]";
+    po.markers = paper_markers();
+    write_plot_png(out / "compare.png", series, po);
+    write_text_file(out / "compare.csv", csv);
+    write_text_file(out / "compare.json", compare_json(world.name, runs, variants, interrupted).dump(2) + "\n");
+  };
+  arena.execute([&] {
+    for (const std::string& pname : profiles)
+      for (const std::string& strategy : strategies) {
+        if (stopped_by) break;
+        const std::string variant = strategies.size() == 1 ? pname : profiles.size() == 1 ? strategy : pname + "/" + strategy;
+        const Rgb8 colour = kColours[variants.size() % std::size(kColours)];
+        variants.push_back(variant);
+        for (int k = 0; k < o.seeds && !stopped_by; ++k) {
+          const std::uint64_t seed = o.first_seed + static_cast<std::uint64_t>(k);
+          Profile profile = resolve_profile(pname, over);
+          apply_strategy(profile, strategy);
+          sim::ExploreSettings es = make_settings(profile, seed, o.max_time, 0.0);
+          sim::SimExplore run(world, std::move(profile), es);
+          stopped_by = run_to_end(run, o.quiet, tty, variant + " seed " + std::to_string(seed) + ": ", "the runs so far were saved");
+          if (stopped_by) interrupted = run.summary().stop_detail;
+          series.push_back(curve_series(run.curve(), k == 0 ? variant : "", colour, 2));
+          for (const auto& c : run.curve()) {
+            char buf[256];
+            std::snprintf(buf, sizeof buf, "%s,%s,%s,%llu,%.2f,%.3f,%.4f\n", variant.c_str(), pname.c_str(), strategy.c_str(),
+                          static_cast<unsigned long long>(seed), c.t_s, c.area_m2, c.coverage);
+            csv += buf;
+          }
+          nlohmann::json r = to_json(run.summary());
+          r["variant"] = variant;
+          r["strategy"] = strategy;
+          runs.push_back(std::move(r));
+          write_results();
+        }
+      }
+  });
+  if (runs.empty()) write_results();
+  if (!o.quiet || stopped_by) {
+    const nlohmann::json j = compare_json(world.name, runs, variants, interrupted);
+    std::fprintf(stderr, "duet compare: %s%swrote %s/{compare.png, compare.csv, compare.json}\n%s\n", interrupted.c_str(),
+                 interrupted.empty() ? "" : "; ", o.out.c_str(), j["mean"].dump(2).c_str());
+  }
+  return stopped_by ? StopSignals::exit_code(stopped_by) : 0;
 }
 
 }  // namespace

@@ -1,12 +1,14 @@
 // `duet map DIR`: maps a folder of RGB-D frames with known camera poses into a cloud (PCD, PLY)
 // and a 2D grid (map_server PGM + YAML, PNG), with the mapping pipeline of paper §2.2.
 #include "commands.hpp"
+#include "stop_signals.hpp"
 
 #include <duet/kernels/error.hpp>
 #include <duet/kernels/normals.hpp>
 #include <duet/kernels/voxel_filter.hpp>
 #include <duet/runtime/io/cloud_io.hpp>
 #include <duet/runtime/io/grid_io.hpp>
+#include <duet/runtime/io/output.hpp>
 #include <duet/runtime/mapping/mapper.hpp>
 #include <duet/runtime/config/profile.hpp>
 #include <duet/runtime/io/rgbd_dataset.hpp>
@@ -19,7 +21,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -81,6 +82,10 @@ int run_map(const MapOptions& o) {
   dopt.layout = o.layout;
   const RgbdDataset ds = RgbdDataset::open(o.input, dopt);
   if (ds.empty()) fail(ErrorCode::kInvalidArgument, o.input + ": no frames found");
+  const std::filesystem::path out(o.out);
+  const StopSignals signals;  // SIGINT / SIGTERM from here on: stop after the current frame, save the map so far, say so
+  prepare_output_dir(out);  // before the frames are mapped, not after
+  int stopped_by = 0;
   // A recording's own depth range: the profile's sensor range does not apply to a hand-held camera,
   // but the mapping back-projection range does.
   const bool tty = stderr_is_tty() && !o.quiet;
@@ -127,7 +132,9 @@ int run_map(const MapOptions& o) {
 
     Mapper mapper(ms, T_map_world);
     std::vector<Eigen::Vector2f> track;
+    std::size_t mapped = 0;
     for (std::size_t i = 0; i < ds.size(); ++i) {
+      if ((stopped_by = StopSignals::received()) != 0) break;
       const auto ti = Clock::now();
       const RgbdFrame f = ds.load(i);
       const SensorFrame sf = f.sensor_frame(f.T_world_camera);  // camera -> world; the "robot" is the world origin
@@ -136,6 +143,7 @@ int run_map(const MapOptions& o) {
       const auto& st = mapper.stats();
       const Eigen::Vector3f cam = (T_map_world * f.T_world_camera).translation();
       track.push_back(cam.head<2>());
+      ++mapped;
       if (!o.quiet) {
         const double dt = std::chrono::duration<double>(Clock::now() - ti).count();
         std::fprintf(stderr, "%s[%zu/%zu] %s: %zu points -> %zu voxels (%zu obstacle, %zu floor), grid %dx%d, %.0f ms%s",
@@ -147,8 +155,6 @@ int run_map(const MapOptions& o) {
     }
     if (tty) std::fputc('\n', stderr);
 
-    const std::filesystem::path out(o.out);
-    std::filesystem::create_directories(out);
     const PointCloud& cloud = mapper.cloud();
     write_pcd(out / "cloud.pcd", cloud, PcdEncoding::kBinaryCompressed);
     write_ply(out / "cloud.ply", cloud, PlyEncoding::kBinaryLittleEndian);
@@ -186,7 +192,13 @@ int run_map(const MapOptions& o) {
                  {"free_cells", fr},
                  {"known_area_m2", static_cast<double>(occ + fr) * area}};
     j["seconds"] = std::chrono::duration<double>(Clock::now() - t0).count();
-    std::ofstream(out / "summary.json") << j.dump(2) << "\n";
+    if (stopped_by) {
+      j["interrupted"] = std::string(StopSignals::name(stopped_by)) + " after " + std::to_string(mapped) + " of " +
+                         std::to_string(ds.size()) + " frames: the map of those frames was saved";
+      std::fprintf(stderr, "duet map: %s\n", j["interrupted"].get<std::string>().c_str());
+      rc = StopSignals::exit_code(stopped_by);
+    }
+    write_text_file(out / "summary.json", j.dump(2) + "\n");
     if (!o.quiet)
       std::fprintf(stderr,
                    "duet map: %zu points in the cloud, grid %dx%d at %.3f m (%zu occupied, %zu free cells); wrote %s/{cloud.pcd, "

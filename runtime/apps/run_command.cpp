@@ -2,10 +2,12 @@
 // with no ground truth and no scoring (`duet explore` scores the simulator's runs). Writes the
 // grid map, the cloud map and summary.json (the runtime's timing and why it stopped).
 #include "commands.hpp"
+#include "stop_signals.hpp"
 
 #include <duet/kernels/error.hpp>
 #include <duet/runtime/io/cloud_io.hpp>
 #include <duet/runtime/io/grid_io.hpp>
+#include <duet/runtime/io/output.hpp>
 #include <duet/runtime/robot/robot_loop.hpp>
 
 #include <nlohmann/json.hpp>
@@ -13,7 +15,6 @@
 
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 
 namespace duet::app {
@@ -39,19 +40,27 @@ int run(const RunOptions& o) {
   rs.realtime = o.realtime;
   validate(rs);
   const std::filesystem::path out(o.out);
-  std::filesystem::create_directories(out);
+  const StopSignals signals;  // SIGINT / SIGTERM from here on: stop the loop, save the maps so far, say so
+  prepare_output_dir(out);  // before the run, not after it
+  int stopped_by = 0;
   tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
   arena.execute([&] {
     std::unique_ptr<RobotSource> source = robot_sources().make(o.robot, profile, o.seed);
     ExplorationRuntime runtime(profile, source->chassis(), source->sensors());
     double next_print = 10.0;
-    const RobotRunResult r = run_robot(*source, runtime, rs, [&](double t) {
+    RobotRunResult r = run_robot(*source, runtime, rs, [&](double t) {
       if (!o.quiet && t + 1e-9 >= next_print) {
         std::fprintf(stderr, "t = %6.1f s  state %s\n", t, to_string(runtime.state()));
         next_print += 10.0;
       }
-      return true;
+      stopped_by = StopSignals::received();
+      return stopped_by == 0;
     });
+    if (stopped_by) {
+      char why[128];
+      std::snprintf(why, sizeof why, "%s at t = %.1f s: the maps so far were saved", StopSignals::name(stopped_by), r.time_s);
+      r.stop_detail = why;
+    }
     const OccupancyGrid& grid = runtime.map_grid();
     if (grid.width() > 0 && grid.height() > 0) {
       write_map_server(grid, out / "grid.yaml");
@@ -68,12 +77,13 @@ int run(const RunOptions& o) {
     j["runtime"] = timing_json(r.timing);
     j["runtime"]["execution"] = to_string(profile.runtime.execution);
     j["runtime"]["paced_by_wall_clock"] = o.realtime;
-    std::ofstream(out / "summary.json") << j.dump(2) << "\n";
-    if (!o.quiet)
+    j["interrupted"] = stopped_by != 0;
+    write_text_file(out / "summary.json", j.dump(2) + "\n");
+    if (!o.quiet || stopped_by)
       std::fprintf(stderr, "%s after %.1f s%s%s; wrote %s/{grid.yaml, grid.pgm, grid.png, cloud.pcd, summary.json}\n",
                    r.done ? "done" : "stopped", r.time_s, r.stop_detail.empty() ? "" : ": ", r.stop_detail.c_str(), out.string().c_str());
   });
-  return 0;
+  return stopped_by ? StopSignals::exit_code(stopped_by) : 0;
 }
 
 }  // namespace

@@ -11,6 +11,14 @@
 #include <fstream>
 #include <string>
 #include <sys/wait.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <iterator>
+#include <thread>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -326,4 +334,116 @@ TEST(DuetCli, RunsTheLoopOnARobotSourceByName) {
   const CliRun missing = run("run -q --robot sim:" + (dir / "nope.yaml").string() + " --max-time 1 --out " + (dir / "bad").string());
   EXPECT_NE(missing.code, 0);
   EXPECT_NE(missing.output.find("nope.yaml"), std::string::npos) << missing.output;
+}
+
+namespace {
+
+/// Starts `duet ARGS...` (output to log), waits until `ready` exists (the output folder: the
+/// command has installed its stop handlers by then) and delay_ms more, sends `sig` and waits for
+/// the exit.
+/// Returns the exit status as waitpid() gives it; -1 if it did not stop within `limit_s`.
+int run_and_signal(const std::vector<std::string>& args, const fs::path& ready, int sig, const fs::path& log, int delay_ms,
+                   double limit_s = 600.0) {
+  const pid_t pid = ::fork();
+  if (pid < 0) return -1;
+  if (pid == 0) {
+    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd >= 0) {
+      ::dup2(fd, 1);
+      ::dup2(fd, 2);
+    }
+    std::vector<char*> argv{const_cast<char*>(DUET_CLI)};
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(DUET_CLI, argv.data());
+    ::_exit(127);
+  }
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
+  int status = 0;
+  while (!fs::exists(ready) && elapsed() < limit_s) {
+    if (::waitpid(pid, &status, WNOHANG) == pid) return status;  // ended early
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+  ::kill(pid, sig);
+  while (elapsed() < limit_s) {
+    if (::waitpid(pid, &status, WNOHANG) == pid) return status;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ::kill(pid, SIGKILL);
+  ::waitpid(pid, &status, 0);
+  return -1;
+}
+
+std::string slurp_text(const fs::path& p) {
+  std::ifstream f(p);
+  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
+}
+
+}  // namespace
+
+TEST(DuetCli, SigintSavesTheExplorationSoFar) {
+  const fs::path dir = temp_dir("sigint");
+  const fs::path out = dir / "out";
+  const int status = run_and_signal({"explore", "-q", "-j", "1", "--max-time", "3000", "--out", out.string()}, out, SIGINT, dir / "log.txt", 300);
+  const std::string log = slurp_text(dir / "log.txt");
+  ASSERT_TRUE(WIFEXITED(status)) << "status " << status << "\n" << log;
+  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGINT) << log;
+  EXPECT_NE(log.find("SIGINT at t = "), std::string::npos) << log;
+  EXPECT_NE(log.find("the run so far was saved"), std::string::npos) << log;
+  for (const char* f : {"cloud.pcd", "cloud.ply", "grid.yaml", "grid.pgm", "grid.png", "trajectory.tum", "trajectory_true.tum",
+                        "curve.csv", "curve.png", "log.json", "summary.json"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_EQ(s["stop_reason"], "interrupted");
+  EXPECT_NE(s["stop_detail"].get<std::string>().find("SIGINT"), std::string::npos);
+  EXPECT_LT(s["sim_time_s"].get<double>(), 3000.0);
+  EXPECT_GT(duet::read_map_server(out / "grid.yaml").known_cells(), 100u);
+  EXPECT_GT(duet::read_pcd(out / "cloud.pcd").size(), 100u);
+  // The trajectory has a pose per control period up to the stop.
+  std::ifstream tum(out / "trajectory.tum");
+  std::size_t lines = 0;
+  for (std::string l; std::getline(tum, l);) lines += !l.empty() && l[0] != '#';
+  EXPECT_GE(lines, static_cast<std::size_t>(s["sim_time_s"].get<double>() / 0.05 - 1.0));
+  for (const auto& e : fs::directory_iterator(out)) EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos);
+}
+
+TEST(DuetCli, SigtermKeepsTheComparisonsFinishedRuns) {
+  const fs::path dir = temp_dir("sigterm");
+  const fs::path out = dir / "out";
+  // The first run explores the room and stops by itself; SIGTERM as soon as its results are
+  // written stops the second.
+  const fs::path world = write_file(dir, "room.yaml", kRoomWorld);
+  const int status = run_and_signal({"compare", "-q", "-j", "1", "--world", world.string(), "--profiles", "dual", "--seeds", "2",
+                                     "--max-time", "3000", "--out", out.string()},
+                                    out / "compare.json", SIGTERM, dir / "log.txt", 0);
+  const std::string log = slurp_text(dir / "log.txt");
+  ASSERT_TRUE(WIFEXITED(status)) << "status " << status << "\n" << log;
+  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGTERM) << log;
+  const auto j = nlohmann::json::parse(std::ifstream(out / "compare.json"));
+  ASSERT_TRUE(j.contains("interrupted")) << j.dump(1);
+  EXPECT_NE(j["interrupted"].get<std::string>().find("SIGTERM"), std::string::npos);
+  ASSERT_EQ(j["runs"].size(), 2u);  // the finished first run and the interrupted second one
+  EXPECT_EQ(j["runs"][0]["stop_reason"], "explorer_done");
+  EXPECT_EQ(j["runs"][1]["stop_reason"], "interrupted");
+  EXPECT_EQ(j["mean"]["dual"]["runs"].get<int>(), 2);
+  EXPECT_NE(slurp_text(out / "compare.csv").find("dual,dual,paper,2,"), std::string::npos);
+}
+
+TEST(DuetCli, SigintSavesTheRobotLoopsMapsSoFar) {
+  const fs::path dir = temp_dir("sigint_run");
+  const fs::path out = dir / "out";
+  const int status =
+      run_and_signal({"run", "-q", "-j", "1", "--robot", "sim:lab", "--max-time", "3000", "--out", out.string()}, out, SIGINT, dir / "log.txt", 1500);
+  const std::string log = slurp_text(dir / "log.txt");
+  ASSERT_TRUE(WIFEXITED(status)) << "status " << status << "\n" << log;
+  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGINT) << log;
+  const auto s = nlohmann::json::parse(std::ifstream(out / "summary.json"));
+  EXPECT_TRUE(s["interrupted"].get<bool>());
+  EXPECT_NE(s["stop_detail"].get<std::string>().find("SIGINT at t = "), std::string::npos) << s.dump(1);
+  EXPECT_LT(s["time_s"].get<double>(), 3000.0);
+  EXPECT_GT(duet::read_map_server(out / "grid.yaml").known_cells(), 100u);
+  EXPECT_TRUE(fs::exists(out / "cloud.pcd"));
 }

@@ -46,6 +46,7 @@ const char* to_string(StopReason r) {
     case StopReason::kRunning: return "running";
     case StopReason::kExplorerDone: return "explorer_done";
     case StopReason::kTimeLimit: return "time_limit";
+    case StopReason::kInterrupted: return "interrupted";
   }
   return "unknown";
 }
@@ -144,13 +145,23 @@ bool SimExplore::step() {
   }
   if (runtime_->state() == ExplorerState::kDone) reason_ = StopReason::kExplorerDone;
   else if (t_ + 1e-9 >= settings_.max_time_s) reason_ = StopReason::kTimeLimit;
-  if (reason_ != StopReason::kRunning) {
-    runtime_->drain();  // background tasks done: the mapper and the explorer are the caller's to read
-    const CurvePoint p = measure();
-    if (curve_.empty() || curve_.back().t_s < t_) curve_.push_back(p);
-  }
+  if (reason_ != StopReason::kRunning) finish();
   wall_elapsed_ = wall_.now_s();
   return reason_ == StopReason::kRunning;
+}
+
+void SimExplore::finish() {
+  runtime_->drain();  // background tasks done: the mapper and the explorer are the caller's to read
+  const CurvePoint p = measure();
+  if (curve_.empty() || curve_.back().t_s < t_) curve_.push_back(p);
+}
+
+void SimExplore::interrupt(const std::string& why) {
+  if (reason_ != StopReason::kRunning) return;
+  reason_ = StopReason::kInterrupted;
+  interrupt_detail_ = why;
+  finish();
+  wall_elapsed_ = wall_.now_s();
 }
 
 void SimExplore::run(const std::function<void(const SimExplore&)>& progress) {
@@ -171,7 +182,7 @@ ExploreSummary SimExplore::summary() const {
   s.seed = settings_.seed;
   s.stop_reason = reason_;
   if (runtime_->state() == ExplorerState::kDone) s.explorer_status = duet::to_string(runtime_->stop_status());
-  s.stop_detail = runtime_->stop_detail();
+  s.stop_detail = reason_ == StopReason::kInterrupted ? interrupt_detail_ : runtime_->stop_detail();
   s.explorer_state = duet::to_string(runtime_->state());
   s.sim_time_s = t_;
   s.wall_time_s = wall_elapsed_;

@@ -80,6 +80,7 @@ enum class StopReason {
   kRunning,
   kExplorerDone,   ///< the explorer found nothing left to explore (see explorer_status)
   kTimeLimit,      ///< max_time_s reached
+  kInterrupted,    ///< interrupt() (e.g. SIGINT): stopped early, the run so far is complete and scored
 };
 [[nodiscard]] const char* to_string(StopReason r);
 
@@ -147,6 +148,9 @@ class SimExplore {
   bool step();
   /// Steps until the run stops; calls `progress` about once per simulated second.
   void run(const std::function<void(const SimExplore&)>& progress = {});
+  /// Stops a running run now (StopReason::kInterrupted): background tasks are finished and the
+  /// run is scored as it stands. `why` becomes the summary's stop_detail. No effect once stopped.
+  void interrupt(const std::string& why);
 
   [[nodiscard]] double now_s() const noexcept { return t_; }
   [[nodiscard]] bool running() const noexcept { return reason_ == StopReason::kRunning; }
@@ -164,6 +168,8 @@ class SimExplore {
   [[nodiscard]] CurvePoint measure() const;
 
  private:
+  void finish();  ///< the run has stopped: drain the runtime, the last curve point
+
   std::shared_ptr<const World> world_;
   Profile profile_;
   ExploreSettings settings_;
@@ -177,6 +183,7 @@ class SimExplore {
   double dt_ = 0.05;
   double next_curve_t_ = 0.0;
   StopReason reason_ = StopReason::kRunning;
+  std::string interrupt_detail_;
   std::vector<CurvePoint> curve_;
   std::vector<CollisionRecord> collision_log_;
   std::vector<StampedPose> est_traj_, true_traj_;
