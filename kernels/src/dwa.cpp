@@ -57,15 +57,20 @@ float sample(float lo, float hi, int n, int i) {
   return lo + (hi - lo) * (static_cast<float>(i) / static_cast<float>(n - 1));
 }
 
-/// Window [lo, hi] on one axis: current +- delta, within [min, max]; if current is outside the
-/// limits, the single reachable value nearest the limit.
-void axis_window(float cur, float delta, float mn, float mx, float& lo, float& hi) {
+/// Window [lo, hi] on one axis: current +- delta, within [min, max]; if current is outside them,
+/// the single reachable value nearest them (decelerate as hard as allowed). Always within the
+/// hard limits [hard_lo, hard_hi] (the chassis'): a measured velocity beyond those by more than
+/// one period's change (an odometry glitch, a push) gives the limit itself, never a command
+/// beyond it.
+void axis_window(float cur, float delta, float mn, float mx, float hard_lo, float hard_hi, float& lo, float& hi) {
   lo = std::max(mn, cur - delta);
   hi = std::min(mx, cur + delta);
   if (lo > hi) {
     if (cur > mx) hi = lo;  // above the limit: decelerate as hard as allowed
     else lo = hi;           // below the limit
   }
+  lo = std::clamp(lo, hard_lo, hard_hi);
+  hi = std::clamp(hi, hard_lo, hard_hi);
 }
 
 float dist_to_polyline(const std::vector<Eigen::Vector2f>& pl, float px, float py) {
@@ -103,6 +108,7 @@ void validate_view(const ClearanceView& c) {
 struct Derived {
   float dv, domega;    // acceleration window half-widths
   float w_max;         // W
+  float w_hard;        // the chassis' angular speed limit: no command beyond it
   float thr;           // radius + margin
   float backoff_speed; // effective
 };
@@ -112,6 +118,7 @@ Derived derive(const DwaSettings& s) {
   d.dv = s.limits.max_accel_mps2 * s.control_period_s;
   d.domega = std::min(s.limits.max_alpha_rps2, s.mapping_max_alpha_rps2) * s.control_period_s;
   d.w_max = std::min(s.limits.max_omega_rps, s.mapping_max_omega_rps);
+  d.w_hard = s.limits.max_omega_rps;
   d.thr = s.robot_radius_m + s.safety_margin_m;
   d.backoff_speed = std::min(s.backoff_speed_mps, -s.limits.min_v_mps);
   return d;
@@ -120,7 +127,7 @@ Derived derive(const DwaSettings& s) {
 /// omega moved toward `target` within the window of the paper's constraint (as the samples).
 float ramp_omega(float cur, float target, const Derived& d) {
   float lo, hi;
-  axis_window(cur, d.domega, -d.w_max, d.w_max, lo, hi);
+  axis_window(cur, d.domega, -d.w_max, d.w_max, -d.w_hard, d.w_hard, lo, hi);
   return std::clamp(target, lo, hi);
 }
 
@@ -276,9 +283,28 @@ PathProjection project_on_path(std::span<const Eigen::Vector2f> path, const Eige
   return r;
 }
 
+namespace {
+DwaResult dwa_step_in_window(const ClearanceView& clearance, const Pose2& pose, const Twist& current,
+                             std::span<const Eigen::Vector2f> path, const DwaSettings& s, DwaState& state,
+                             DwaWorkspace& ws);
+}  // namespace
+
 DwaResult dwa_step(const ClearanceView& clearance, const Pose2& pose, const Twist& current,
                    std::span<const Eigen::Vector2f> path, const DwaSettings& s, DwaState& state,
                    DwaWorkspace& ws) {
+  DwaResult r = dwa_step_in_window(clearance, pose, current, path, s, state, ws);
+  // The windows are within the chassis limits (axis_window); this guards every other command
+  // (recovery, rotation) the same way: with a measured glitch of 100 m/s the command is the
+  // limit, not 99.95 m/s.
+  r.cmd.v = std::clamp(r.cmd.v, s.limits.min_v_mps, s.limits.max_v_mps);
+  r.cmd.omega = std::clamp(r.cmd.omega, -s.limits.max_omega_rps, s.limits.max_omega_rps);
+  return r;
+}
+
+namespace {
+DwaResult dwa_step_in_window(const ClearanceView& clearance, const Pose2& pose, const Twist& current,
+                             std::span<const Eigen::Vector2f> path, const DwaSettings& s, DwaState& state,
+                             DwaWorkspace& ws) {
   validate(s);
   validate_view(clearance);
   if (!std::isfinite(pose.x) || !std::isfinite(pose.y) || !std::isfinite(pose.theta))
@@ -412,8 +438,8 @@ DwaResult dwa_step(const ClearanceView& clearance, const Pose2& pose, const Twis
   // 6. Samples and per-omega unit-speed offsets S_k (Eq. 4, incremental rotation).
   const int nv = s.v_samples, nw = s.omega_samples, ns = s.steps;
   float v_lo, v_hi, w_lo, w_hi;
-  axis_window(current.v, d.dv, s.limits.min_v_mps, s.limits.max_v_mps, v_lo, v_hi);
-  axis_window(current.omega, d.domega, -d.w_max, d.w_max, w_lo, w_hi);
+  axis_window(current.v, d.dv, s.limits.min_v_mps, s.limits.max_v_mps, s.limits.min_v_mps, s.limits.max_v_mps, v_lo, v_hi);
+  axis_window(current.omega, d.domega, -d.w_max, d.w_max, -d.w_hard, d.w_hard, w_lo, w_hi);
   ws.vs.resize(static_cast<std::size_t>(nv));
   ws.omegas.resize(static_cast<std::size_t>(nw));
   for (int i = 0; i < nv; ++i) ws.vs[static_cast<std::size_t>(i)] = sample(v_lo, v_hi, nv, i);
@@ -519,5 +545,6 @@ DwaResult dwa_step(const ClearanceView& clearance, const Pose2& pose, const Twis
   r.evaluated_trajectories = nv * nw;
   return r;
 }
+}  // namespace
 
 }  // namespace duet

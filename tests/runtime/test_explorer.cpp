@@ -738,3 +738,23 @@ TEST(Explorer, ShiftFrameMovesTheGoalThePathAndTheRecentObstacles) {
 }
 
 }  // namespace
+
+TEST(Explorer, CommandNeverExceedsTheChassisWhateverTheOdometrySays) {
+  // A glitched measured twist (100 m/s, 100 rad/s) reaches every behaviour that works from it -
+  // the window, the turn to a goal's heading, the escapes: the command stays within the chassis.
+  const duet::Profile p = frontier_only_profile();
+  duet::Explorer e(p);
+  decide_in_half_known_room(e);
+  ASSERT_TRUE(e.goal().has_value());
+  const float v_max = p.chassis.max_linear_speed_mps, w_max = p.chassis.max_angular_speed_radps();
+  double t = 0.1;
+  for (const duet::Twist glitch : {duet::Twist{100.0f, 0.0f}, duet::Twist{-100.0f, 3.0f}, duet::Twist{0.2f, 100.0f},
+                                   duet::Twist{0.0f, -100.0f}}) {
+    for (const duet::Pose2 at : {duet::Pose2{1.0f, 1.5f, 0.0f}, duet::Pose2{e.goal()->x, e.goal()->y, e.goal()->theta + 1.0f}}) {
+      const duet::Twist cmd = e.control(at, glitch, t);
+      t += 0.05;
+      EXPECT_LE(std::fabs(cmd.v), v_max) << glitch.v << " " << glitch.omega;
+      EXPECT_LE(std::fabs(cmd.omega), w_max) << glitch.v << " " << glitch.omega;
+    }
+  }
+}

@@ -1,6 +1,7 @@
 /// @file world.cpp
 /// Simulated worlds: the YAML loader, validation and the built-in worlds. The map_server loader is in
 /// world_from_map.cpp, collision and ground truth in world_geometry.cpp.
+#include <duet/runtime/io/input_limits.hpp>
 #include <duet/kernels/error.hpp>
 #include <duet/sim/world.hpp>
 
@@ -399,7 +400,7 @@ World parse_world(std::string_view yaml_text, std::string_view source_name) {
 }
 
 World load_world(const std::filesystem::path& path) {
-  const std::string text = detail::read_whole_file(path);
+  const std::string text = detail::read_whole_file(path, input_limits::kYamlBytes, "world file");
   // A map_server YAML has `image` and `resolution` at the top level.
   try {
     const YAML::Node root = YAML::Load(text);

@@ -7,6 +7,9 @@
 /// the key it came from.
 #include <duet/kernels/error.hpp>
 #include <duet/runtime/config/profile.hpp>
+#include <duet/runtime/io/input_limits.hpp>
+
+#include "io/file_util.hpp"
 
 #include "config/profile_ranges.hpp"
 #include "config/settings_yaml.hpp"
@@ -265,12 +268,8 @@ Profile parse_profile(std::string_view yaml_text, std::string_view source_name, 
 ProfileOverlay file_overlay(const std::filesystem::path& path) {
   const std::string name = path.string();
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) fail(ErrorCode::kIo, name + ": overlay file not found (or not a regular file)");
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (!in || in.bad()) fail(ErrorCode::kIo, name + ": cannot read the overlay file");
-  return ProfileOverlay{name, text.str()};
+  if (!std::filesystem::exists(path, ec)) fail(ErrorCode::kIo, name + ": overlay file not found");
+  return ProfileOverlay{name, detail::read_whole_file(path, input_limits::kYamlBytes, "overlay file")};
 }
 
 Profile load_profile(const std::filesystem::path& path, std::span<const ProfileOverlay> overlays) {
@@ -280,12 +279,7 @@ Profile load_profile(const std::filesystem::path& path, std::span<const ProfileO
     fail(ErrorCode::kIo, name + ": profile file not found");
   if (std::filesystem::is_directory(path, ec))
     fail(ErrorCode::kIo, name + ": is a directory, expected a profile YAML file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(ErrorCode::kIo, name + ": cannot open the profile file for reading");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) fail(ErrorCode::kIo, name + ": read error");
-  return parse_profile(text.str(), name, overlays);
+  return parse_profile(detail::read_whole_file(path, input_limits::kYamlBytes, "profile"), name, overlays);
 }
 
 std::vector<std::string> builtin_profile_names() {

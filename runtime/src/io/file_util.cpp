@@ -17,24 +17,62 @@ namespace fs = std::filesystem;
   fail(code, path.string() + ": " + what);
 }
 
-std::string read_whole_file(const fs::path& path) {
+namespace {
+const char* kind_of(fs::file_type t) {
+  switch (t) {
+    case fs::file_type::directory: return "a directory";
+    case fs::file_type::fifo: return "a FIFO (named pipe)";
+    case fs::file_type::character: return "a character device";
+    case fs::file_type::block: return "a block device";
+    case fs::file_type::socket: return "a socket";
+    default: return "not a regular file";
+  }
+}
+
+std::string mib(std::uintmax_t bytes) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.1f MiB", static_cast<double>(bytes) / static_cast<double>(std::uintmax_t{1} << 20));
+  return buf;
+}
+}  // namespace
+
+void check_input_file(const fs::path& path, std::uintmax_t max_bytes, const char* what) {
   std::error_code ec;
-  if (fs::is_directory(path, ec)) fail_file(ErrorCode::kIo, path, "is a directory, not a file");
+  const fs::file_status st = fs::status(path, ec);  // follows symbolic links
+  if (ec || st.type() == fs::file_type::not_found) {
+    if (st.type() == fs::file_type::not_found) fail_file(ErrorCode::kIo, path, std::string("cannot open the ") + what + ": no such file");
+    fail_file(ErrorCode::kIo, path, std::string("cannot open the ") + what + ": " + ec.message());
+  }
+  if (st.type() != fs::file_type::regular)
+    fail_file(ErrorCode::kIo, path, std::string("the ") + what + " is " + kind_of(st.type()) + ", not a regular file");
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec) fail_file(ErrorCode::kIo, path, std::string("cannot read the size of the ") + what + ": " + ec.message());
+  if (size > max_bytes)
+    fail_file(ErrorCode::kIo, path, std::string("the ") + what + " is " + mib(size) + "; the limit is " + mib(max_bytes));
+}
+
+std::string read_whole_file(const fs::path& path, std::uintmax_t max_bytes, const char* what) {
+  check_input_file(path, max_bytes, what);
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (f == nullptr) {
     fail_file(ErrorCode::kIo, path, std::string("cannot open for reading: ") + std::strerror(errno));
   }
   std::string data;
+  bool too_big = false;
   try {
     char buf[1 << 16];
     if (std::fseek(f, 0, SEEK_END) == 0) {
       const long size = std::ftell(f);
-      if (size > 0) data.reserve(static_cast<std::size_t>(size));
+      if (size > 0 && static_cast<std::uintmax_t>(size) <= max_bytes) data.reserve(static_cast<std::size_t>(size));
       std::rewind(f);
     }
     for (;;) {
       const std::size_t got = std::fread(buf, 1, sizeof buf, f);
       data.append(buf, got);
+      if (data.size() > max_bytes) {  // grew while read
+        too_big = true;
+        break;
+      }
       if (got < sizeof buf) break;
     }
   } catch (const std::bad_alloc&) {
@@ -44,6 +82,7 @@ std::string read_whole_file(const fs::path& path) {
   const bool bad = std::ferror(f) != 0;
   const int err = errno;
   std::fclose(f);
+  if (too_big) fail_file(ErrorCode::kIo, path, std::string("the ") + what + " grew beyond the limit of " + mib(max_bytes) + " while read");
   if (bad) fail_file(ErrorCode::kIo, path, std::string("read error: ") + std::strerror(err));
   return data;
 }

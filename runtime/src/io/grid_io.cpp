@@ -1,5 +1,6 @@
 /// @file grid_io.cpp
 /// map_server YAML + image and PNG pictures of occupancy grids (see grid_io.hpp).
+#include <duet/runtime/io/input_limits.hpp>
 #include <duet/kernels/error.hpp>
 #include "io/file_util.hpp"
 #include <duet/runtime/io/grid_io.hpp>
@@ -183,7 +184,7 @@ Image8 read_pgm(const fs::path& path, std::string_view file) {
 }
 
 Image8 read_image(const fs::path& path) {
-  const std::string file = read_whole_file(path);
+  const std::string file = read_whole_file(path, input_limits::kImageBytes, "map image");
   if (file.size() >= 2 && file[0] == 'P' && (file[1] == '5' || file[1] == '2')) return read_pgm(path, file);
   if (file.empty()) fail_file(ErrorCode::kParse, path, "image file is empty");
   cv::Mat m;
@@ -233,12 +234,9 @@ struct MapYaml {
 
 MapYaml parse_map_yaml(const fs::path& yaml_path) {
   YAML::Node root;
+  const std::string yaml_text = read_whole_file(yaml_path, input_limits::kYamlBytes, "map YAML");
   try {
-    root = YAML::LoadFile(yaml_path.string());
-  } catch (const YAML::BadFile&) {
-    std::error_code ec;
-    if (!fs::exists(yaml_path, ec)) fail_file(ErrorCode::kIo, yaml_path, "cannot open for reading: no such file");
-    fail_file(ErrorCode::kIo, yaml_path, "cannot open for reading");
+    root = YAML::Load(yaml_text);
   } catch (const YAML::Exception& e) {
     fail_file(ErrorCode::kParse, yaml_path,
               "line " + std::to_string(e.mark.line + 1) + ", column " + std::to_string(e.mark.column + 1) + ": " + e.msg);

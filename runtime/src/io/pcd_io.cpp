@@ -1,5 +1,6 @@
 /// @file pcd_io.cpp
 /// PCD reader (see cloud_io.hpp): header parsing, ascii, binary and binary_compressed data; the writer is pcd_write.cpp.
+#include <duet/runtime/io/input_limits.hpp>
 #include <duet/kernels/error.hpp>
 #include "io/cloud_io_detail.hpp"
 #include "io/file_util.hpp"
@@ -424,7 +425,7 @@ void read_pcd_ascii(const PcdHeader& h, std::string_view file, const fs::path& p
 }
 
 PointCloud read_pcd_impl(const fs::path& path, PcdInfo* info) {
-  const std::string file = read_whole_file(path);
+  const std::string file = read_whole_file(path, input_limits::kCloudBytes, "PCD file");
   const PcdHeader h = parse_pcd_header(path, file);
   PointCloud cloud;
   const std::size_t remaining = file.size() - h.data_offset;

@@ -1,5 +1,6 @@
 /// @file ply_io.cpp
 /// PLY reader and writer (see cloud_io.hpp): header parsing, ascii and binary (either byte order) data.
+#include <duet/runtime/io/input_limits.hpp>
 #include <duet/kernels/error.hpp>
 #include "io/cloud_io_detail.hpp"
 #include "io/file_util.hpp"
@@ -374,7 +375,7 @@ class PlyDataReader {
 };
 
 PointCloud read_ply_impl(const fs::path& path) {
-  const std::string file = read_whole_file(path);
+  const std::string file = read_whole_file(path, input_limits::kCloudBytes, "PLY file");
   PlyHeader h = parse_ply_header(path, file);
   std::size_t vertex = h.elements.size();
   for (std::size_t e = 0; e < h.elements.size(); ++e) {

@@ -2,6 +2,9 @@
 /// RGB-D sequences on disk -> RgbdFrame (see rgbd_dataset.hpp for the layouts).
 #include <duet/kernels/error.hpp>
 #include <duet/runtime/io/rgbd_dataset.hpp>
+#include <duet/runtime/io/input_limits.hpp>
+
+#include "io/file_util.hpp"
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -42,14 +45,15 @@ bool is_file(const fs::path& p) {
   return fs::is_regular_file(p, ec);
 }
 
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  if (!in) fail(ErrorCode::kIo, p.string() + ": cannot open for reading");
-  std::ostringstream s;
-  s << in.rdbuf();
-  if (in.bad()) fail(ErrorCode::kIo, p.string() + ": read error");
-  return s.str();
+// A file the folder must have: "<path>: <missing>" when it is absent; a FIFO, a device, a folder
+// or a file over the limit is refused naming what it is (check_input_file, input_limits.hpp).
+void require_file(const fs::path& p, const std::string& missing, std::uintmax_t max_bytes, const char* what) {
+  std::error_code ec;
+  if (!fs::exists(p, ec)) fail(ErrorCode::kIo, p.string() + ": " + missing);
+  detail::check_input_file(p, max_bytes, what);
 }
+
+std::string read_text(const fs::path& p) { return detail::read_whole_file(p, input_limits::kTextBytes, "text file"); }
 
 std::vector<std::string> split_ws(std::string_view line) {
   std::vector<std::string> out;
@@ -167,7 +171,7 @@ std::string type_name(const cv::Mat& m) {
 }
 
 cv::Mat read_depth(const fs::path& p) {
-  if (!is_file(p)) fail(ErrorCode::kIo, p.string() + ": missing frame file (depth image)");
+  require_file(p, "missing frame file (depth image)", input_limits::kImageBytes, "depth image");
   cv::Mat d = cv::imread(p.string(), cv::IMREAD_UNCHANGED);
   if (d.empty()) fail(ErrorCode::kIo, p.string() + ": cannot decode the depth image");
   if (d.type() != CV_16UC1)
@@ -277,7 +281,7 @@ RgbdDataset RgbdDataset::open(const fs::path& dir, const RgbdDatasetOptions& opt
     const fs::path color_dir = dir / "color", depth_dir = dir / "depth", pose_file = dir / "pose.txt";
     if (!is_dir(color_dir)) fail(ErrorCode::kIo, color_dir.string() + ": missing folder (slambook2 layout)");
     if (!is_dir(depth_dir)) fail(ErrorCode::kIo, depth_dir.string() + ": missing folder (slambook2 layout)");
-    if (!is_file(pose_file)) fail(ErrorCode::kIo, pose_file.string() + ": missing file (slambook2 layout)");
+    require_file(pose_file, "missing file (slambook2 layout)", input_limits::kTextBytes, "pose list");
     const auto colors = numbered_files(color_dir, {".png", ".jpg"});
     const auto depths = numbered_files(depth_dir, {".pgm", ".png"});
     std::vector<long long> ids;
@@ -347,8 +351,8 @@ RgbdDataset RgbdDataset::open(const fs::path& dir, const RgbdDatasetOptions& opt
       ds.intrinsics_ = *options.intrinsics;
     } else {
       const fs::path kfile = dir / "camera-intrinsics.txt";
-      if (!is_file(kfile))
-        fail(ErrorCode::kIo, kfile.string() + ": missing file (3dmatch layout; or pass RgbdDatasetOptions::intrinsics)");
+      require_file(kfile, "missing file (3dmatch layout; or pass RgbdDatasetOptions::intrinsics)", input_limits::kTextBytes,
+                   "intrinsics file");
       ds.intrinsics_ = intrinsics_from_file(kfile);
     }
   }
@@ -395,7 +399,7 @@ RgbdFrame RgbdDataset::load(std::size_t i) const {
     std::copy_n(d.ptr<std::uint16_t>(r), w, f.depth.data() + static_cast<std::size_t>(r) * w);
 
   if (load_color_) {
-    if (!is_file(e.color)) fail(ErrorCode::kIo, e.color.string() + ": missing frame file (colour image)");
+    require_file(e.color, "missing frame file (colour image)", input_limits::kImageBytes, "colour image");
     const cv::Mat c = cv::imread(e.color.string(), cv::IMREAD_COLOR);  // 8-bit BGR
     if (c.empty()) fail(ErrorCode::kIo, e.color.string() + ": cannot decode the colour image");
     if (c.cols != d.cols || c.rows != d.rows)

@@ -28,6 +28,11 @@ Twist Controller::control(const Pose2& robot, const Twist& current, double now_s
     return last_cmd_;
   }
   last_cmd_ = follow(robot, current, now_s, link);
+  // Whatever a behaviour computed from the measured twist (a glitch of 100 m/s included), the
+  // command never exceeds the chassis' speeds (the profile's chassis section).
+  const float v_max = profile_.chassis.max_linear_speed_mps, w_max = profile_.chassis.max_angular_speed_radps();
+  last_cmd_.v = std::clamp(last_cmd_.v, -v_max, v_max);
+  last_cmd_.omega = std::clamp(last_cmd_.omega, -w_max, w_max);
   return last_cmd_;
 }
 
