@@ -432,6 +432,18 @@ TEST(RgbdDatasetErrors, PoseCountDiffersFromFrameCount) {
   expect_contains(open_error(tmp2.path()).what(), "frame-000007.pose.txt: missing frame file");
 }
 
+TEST(RgbdDatasetErrors, GapInTheFrameNumbersIsNamedNotPairedByRank) {
+  // Frames 1, 2, 4 and three poses: pairing by rank would give frame 4 the pose of frame 3.
+  TempDir tmp;
+  make_slambook(tmp.path(), 4);
+  fs::remove(tmp.path() / "color" / "3.png");
+  fs::remove(tmp.path() / "depth" / "3.pgm");
+  write_text(tmp.path() / "pose.txt", "1 0 0 0 0 0 1\n2 0 0 0 0 0 1\n4 0 0 0 0 0 1\n");
+  const duet::Error e = open_error(tmp.path());
+  EXPECT_EQ(e.code(), duet::ErrorCode::kParse);
+  expect_contains(e.what(), "3.png: missing frame: the frames jump from 2 to 4");
+}
+
 TEST(RgbdDatasetErrors, FrameIndexOutOfRange) {
   TempDir tmp;
   make_slambook(tmp.path(), 1);

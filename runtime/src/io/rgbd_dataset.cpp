@@ -296,6 +296,15 @@ RgbdDataset RgbdDataset::open(const fs::path& dir, const RgbdDatasetOptions& opt
         fail(ErrorCode::kIo, (color_dir / (std::to_string(n) + ".png")).string() + ": missing frame file (colour of " +
                                  p.string() + ")");
     if (ids.empty()) fail(ErrorCode::kParse, dir.string() + ": no frames (color/N.png + depth/N.pgm) found");
+    // pose.txt pairs its k-th pose with the k-th frame: a gap in the numbers would pair every
+    // later frame with the pose of another (silently wrong maps). Frames must be numbered
+    // without gaps.
+    for (std::size_t i = 1; i < ids.size(); ++i)
+      if (ids[i] != ids[i - 1] + 1)
+        fail(ErrorCode::kParse, (color_dir / (std::to_string(ids[i - 1] + 1) + ".png")).string() +
+                                    ": missing frame: the frames jump from " + std::to_string(ids[i - 1]) + " to " +
+                                    std::to_string(ids[i]) + "; pose.txt gives one pose per frame in order, so the frames "
+                                    "must be numbered without gaps");
 
     // pose.txt: one line per frame; empty lines and '#' comments are skipped.
     std::vector<Eigen::Isometry3f> poses;
