@@ -399,8 +399,11 @@ DUET_API void duet_segment(duet_device device, const float* xyz, size_t xyz_stri
  * empty (0 x 0) and grows (never shrinks) to contain the data of each update.
  * ========================================================================================== */
 
-/* Creates an empty grid of cells `resolution_m` [m] wide (finite, > 0). Ownership: the caller
- * owns the returned reference; the grid keeps a reference to `device`. Thread-safe. */
+/* Creates an empty grid of cells `resolution_m` [m] wide, in [0.001, 100] (else NULL,
+ * DUET_ERROR_INVALID_ARGUMENT). Ownership: the caller owns the returned reference; the grid
+ * keeps a reference to `device`. Thread-safe.
+ * Coordinates: the map frame reaches +-10 km from its origin (a float still resolves 1 mm
+ * there); a sensor beyond it is DUET_ERROR_OUT_OF_RANGE, points beyond it are skipped. */
 DUET_API duet_grid duet_grid_new(duet_device device, float resolution_m);
 DUET_API void duet_grid_retain(duet_grid grid);
 DUET_API void duet_grid_release(duet_grid grid);
@@ -421,8 +424,8 @@ DUET_API void duet_grid_update_settings_init(duet_grid_update_settings* settings
  * their cells occupied, floor points free, and (clear_along_rays) every cell on the 2D ray
  * from the sensor to each such point's cell is free; at most one update per cell and call.
  * labels (count uint8 at labels_stride) hold enum duet_point_label values (others ->
- * DUET_ERROR_INVALID_ARGUMENT); ignored and non-finite points are skipped. Growing beyond
- * 2^28 cells -> DUET_ERROR_OUT_OF_RANGE. Errors found before the update starts (handles,
+ * DUET_ERROR_INVALID_ARGUMENT); ignored and non-finite points, and points beyond +-10 km,
+ * are skipped. A sensor beyond +-10 km, or growing beyond 2^28 cells -> DUET_ERROR_OUT_OF_RANGE. Errors found before the update starts (handles,
  * buffers, labels, settings) leave the grid unchanged; a kernel error leaves it valid.
  * Thread-safe (exclusive on `grid`). */
 DUET_API void duet_grid_update(duet_grid grid, float sensor_x, float sensor_y, const float* xyz,

@@ -11,8 +11,9 @@
 namespace duet {
 
 OccupancyGrid::OccupancyGrid(float resolution_m) : res_(resolution_m) {
-  if (!(resolution_m > 0.0f) || !std::isfinite(resolution_m))
-    fail(ErrorCode::kInvalidArgument, "OccupancyGrid: resolution must be finite and > 0 m, got " + std::to_string(resolution_m));
+  if (!(resolution_m >= kMinGridResolutionM && resolution_m <= kMaxGridResolutionM))
+    fail(ErrorCode::kInvalidArgument, "OccupancyGrid: resolution must be in [" + std::to_string(kMinGridResolutionM) + ", " +
+                                          std::to_string(kMaxGridResolutionM) + "] m, got " + std::to_string(resolution_m));
 }
 
 OccupancyGrid::OccupancyGrid(float resolution_m, Eigen::Vector2f origin, int width, int height)
@@ -21,6 +22,11 @@ OccupancyGrid::OccupancyGrid(float resolution_m, Eigen::Vector2f origin, int wid
     fail(ErrorCode::kInvalidArgument, "OccupancyGrid: size must be >= 0 and origin finite");
   if (static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height) > (std::uint64_t{1} << 31))
     fail(ErrorCode::kOutOfRange, "OccupancyGrid: " + std::to_string(width) + "x" + std::to_string(height) + " cells is too large");
+  const Eigen::Vector2f far = origin + Eigen::Vector2f(static_cast<float>(width), static_cast<float>(height)) * resolution_m;
+  if (!within_map_limits(origin) || !within_map_limits(far))
+    fail(ErrorCode::kOutOfRange, "OccupancyGrid: the grid spans [" + std::to_string(origin.x()) + ", " + std::to_string(far.x()) +
+                                     "] x [" + std::to_string(origin.y()) + ", " + std::to_string(far.y()) +
+                                     "] m, beyond the map frame's limit of +-" + std::to_string(kMaxCoordinateM) + " m");
   origin_ = origin;
   w_ = width;
   h_ = height;
@@ -40,6 +46,10 @@ void OccupancyGrid::ensure_contains(const Eigen::Vector2f& lo, const Eigen::Vect
                                     std::size_t max_cells) {
   if (!lo.allFinite() || !hi.allFinite())
     fail(ErrorCode::kOutOfRange, "OccupancyGrid::ensure_contains: bounds are not finite");
+  if (!within_map_limits(lo) || !within_map_limits(hi))
+    fail(ErrorCode::kOutOfRange, "OccupancyGrid::ensure_contains: [" + std::to_string(lo.x()) + ", " + std::to_string(hi.x()) +
+                                     "] x [" + std::to_string(lo.y()) + ", " + std::to_string(hi.y()) +
+                                     "] m is beyond the map frame's limit of +-" + std::to_string(kMaxCoordinateM) + " m");
   if (margin_cells < 0) margin_cells = 0;
   // Work in integer cell coordinates relative to the current origin (whole cells: alignment kept).
   const double r = res_;
@@ -121,12 +131,15 @@ void update_grid(OccupancyGrid& grid, const Eigen::Vector2f& sensor_xy, PointsVi
     fail(ErrorCode::kInvalidArgument, "update_grid: " + std::to_string(labels.size()) + " labels for " +
                                           std::to_string(n) + " points");
   if (!sensor_xy.allFinite()) fail(ErrorCode::kInvalidArgument, "update_grid: sensor position is not finite");
+  if (!within_map_limits(sensor_xy))
+    fail(ErrorCode::kOutOfRange, "update_grid: the sensor at (" + std::to_string(sensor_xy.x()) + ", " + std::to_string(sensor_xy.y()) +
+                                     ") m is beyond the map frame's limit of +-" + std::to_string(kMaxCoordinateM) + " m");
   const float max_r2 = settings.max_ray_length_m * settings.max_ray_length_m;
   auto used = [&](std::size_t i, Eigen::Vector2f& xy) {
     if (labels[i] == PointLabel::kIgnored) return false;
     const float* p = points.ptr(i);
     xy = Eigen::Vector2f(p[0], p[1]);
-    return xy.allFinite() && (xy - sensor_xy).squaredNorm() <= max_r2;
+    return within_map_limits(xy) && (xy - sensor_xy).squaredNorm() <= max_r2;  // NaN: not within
   };
 
   // 1. Bounds of the update (sensor + used points); grow the grid to hold them.

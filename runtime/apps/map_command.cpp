@@ -225,7 +225,7 @@ void add_map_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--floor-z", o->floor_z, "floor height in the gravity-aligned map frame [m], or auto")->capture_default_str();
   cmd->add_option("--layout", o->layout, "auto, slambook2 or 3dmatch")->capture_default_str();
   cmd->add_option("--leaf", o->leaf, "voxel size [m] (default: the profile's, 0.05)")->check(CLI::PositiveNumber);
-  cmd->add_option("--grid-res", o->grid_res, "grid cell size [m] (default: the profile's, 0.05)")->check(CLI::PositiveNumber);
+  cmd->add_option("--grid-res", o->grid_res, "grid cell size [m], [0.001, 10] (default: the profile's, 0.05)")->check(CLI::Range(0.001, 10.0));
   cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
   cmd->callback([o, &exit_code] { exit_code = run_map(*o); });

@@ -612,6 +612,30 @@ TEST_F(DeviceTest, GridArgumentValidation) {
   EXPECT_EQ(take(), DUET_ERROR_INVALID_ARGUMENT);
   EXPECT_EQ(duet_grid_new(device_, INFINITY), nullptr);
   EXPECT_EQ(take(), DUET_ERROR_INVALID_ARGUMENT);
+  // A huge resolution overflowed the grid's origin and crashed the next update: refused now
+  // (cells of 1 mm to 100 m).
+  EXPECT_EQ(duet_grid_new(device_, 3e38f), nullptr);
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("resolution must be in"), std::string::npos) << message();
+  EXPECT_EQ(duet_grid_new(device_, 1e-9f), nullptr);
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_ARGUMENT);
+  {
+    // A sensor or points ~1e17 m from the origin: an error or dropped points, never a 0-wide grid
+    // that the next update reads out of bounds.
+    duet_grid far = duet_grid_new(device_, 0.05f);
+    const float pts[6] = {1e17f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f};
+    const uint8_t lab[2] = {DUET_LABEL_OBSTACLE, DUET_LABEL_OBSTACLE};
+    duet_grid_update(far, 1e17f, 0.0f, pts, 0, lab, 0, 2, nullptr);
+    EXPECT_EQ(take(), DUET_ERROR_OUT_OF_RANGE);
+    EXPECT_NE(message().find("limit"), std::string::npos) << message();
+    duet_grid_update(far, 0.0f, 0.0f, pts, 0, lab, 0, 2, nullptr);  // the far point dropped, the near one kept
+    EXPECT_EQ(take(), DUET_ERROR_NONE);
+    EXPECT_GT(duet_grid_get_width(far), 0);
+    EXPECT_GE(duet_grid_get_known_cells(far), 1u);
+    duet_grid_update(far, 0.0f, 0.0f, pts, 0, lab, 0, 2, nullptr);
+    EXPECT_EQ(take(), DUET_ERROR_NONE);
+    duet_grid_release(far);
+  }
 
   duet_grid g = duet_grid_new(device_, 0.05f);
   const float xyz[6] = {1.0f, 0.0f, 0.5f, 0.5f, 0.5f, 0.0f};

@@ -518,13 +518,31 @@ TEST(Grid, BadInputThrows) {
     EXPECT_DUET_ERROR(validate(b.s), kInv, b.field);
   }
   EXPECT_EQ(g.known_cells(), 0u);  // nothing applied
-  // Huge coordinates within a huge max_ray_length: the growth limit, not a wrong or giant grid.
+  // Huge coordinates within a huge max_ray_length: beyond the map frame's limit (kMaxCoordinateM)
+  // a point is dropped like a point out of range; within it, the growth limit - never a wrong
+  // or giant grid.
   s = {};
   s.max_ray_length_m = 1e7f;
-  const std::vector<Eigen::Vector3f> far{{5e6f, 0, 0}};
+  for (const float x : {5e6f, 1e17f, -1e38f}) {
+    const std::vector<Eigen::Vector3f> far{{x, 0, 0}};
+    update_grid(g, Eigen::Vector2f(0, 0), far, one, s, ws);
+    EXPECT_LE(g.width(), 100);  // at most grown round the sensor, never towards the point
+    EXPECT_LE(g.height(), 100);
+    EXPECT_EQ(g.known_cells(), 0u);
+  }
+  const int w = g.width();
+  const std::vector<Eigen::Vector3f> far{{9e3f, 9e3f, 0}};  // within +-1e4 m: 1.8e5 x 1.8e5 cells
   EXPECT_DUET_ERROR(update_grid(g, Eigen::Vector2f(0, 0), far, one, s, ws), ErrorCode::kOutOfRange, "limit");
-  EXPECT_EQ(g.width(), 10);
+  EXPECT_EQ(g.width(), w);
+  // A sensor beyond the limit (a pose of 1e17 m through the C API): an error, not a 0-wide grid.
+  EXPECT_DUET_ERROR(update_grid(g, Eigen::Vector2f(1e17f, 0), p, two, s, ws), ErrorCode::kOutOfRange, "limit of +-10000");
   EXPECT_EQ(g.known_cells(), 0u);
+  // Resolutions: [1 mm, 100 m]; a grid beyond the map frame's limits is refused.
+  for (const float r : {0.0f, 1e-4f, 101.0f, 3e38f}) EXPECT_DUET_ERROR(OccupancyGrid{r}, kInv, "resolution must be in");
+  EXPECT_NO_THROW(OccupancyGrid{kMinGridResolutionM});
+  EXPECT_NO_THROW(OccupancyGrid{kMaxGridResolutionM});
+  EXPECT_DUET_ERROR(OccupancyGrid(1.0f, Eigen::Vector2f(9990.0f, 0.0f), 20, 1), ErrorCode::kOutOfRange, "limit");
+  EXPECT_EQ(g.width(), w);
 }
 
 TEST(Grid, IdenticalWithOneAndTwoThreads) {

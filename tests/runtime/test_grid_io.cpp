@@ -325,7 +325,7 @@ TEST(GridIo, YamlErrorsNameFileAndKey) {
   expect_error(with("image: a.pgm\nresolution: abc\norigin: [0, 0, 0]\n"), ErrorCode::kParse,
                {"map.yaml", "key 'resolution' (line 2)", "expected a number, got 'abc'"});
   expect_error(with("image: a.pgm\nresolution: -1\norigin: [0, 0, 0]\n"), ErrorCode::kParse,
-               {"key 'resolution'", "must be in (0, 1e6]"});
+               {"key 'resolution'", "must be in [0.001, 100]"});
   expect_error(with("image: a.pgm\nresolution: 1\norigin: [0, 0]\n"), ErrorCode::kParse, {"key 'origin'", "[x, y, yaw]"});
   expect_error(with("image: a.pgm\nresolution: 1\norigin: [0, 0, 0.5]\n"), ErrorCode::kUnsupported,
                {"key 'origin'", "yaw"});

@@ -357,7 +357,7 @@ TEST(ProfileErrors, ValidateProfileBuiltInCode) {
     FAIL() << "no error";
   } catch (const duet::Error& e) {
     EXPECT_EQ(e.code(), duet::ErrorCode::kInvalidArgument);
-    expect_contains(e.what(), "my_robot: mapping.grid_resolution_m: must be in (0, 10] m, got 0");
+    expect_contains(e.what(), "my_robot: mapping.grid_resolution_m: must be in [0.001, 10] m, got 0");
   }
 }
 

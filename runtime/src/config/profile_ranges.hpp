@@ -24,7 +24,7 @@ inline constexpr Range kDepthUnits{0.0, 1e6, true, false, "units/m"};
 inline constexpr Range kOffset{-10.0, 10.0, false, false, "m"};
 inline constexpr Range kEuler{-360.0, 360.0, false, false, "deg"};
 inline constexpr Range kRaysPerSensor{1.0, 10000.0, false, false, ""};
-inline constexpr Range kGridResolution{0.0, 10.0, true, false, "m"};
+inline constexpr Range kGridResolution{0.001, 10.0, false, false, "m"};  // within grid.hpp's [kMinGridResolutionM, kMaxGridResolutionM]
 inline constexpr int kMaxSensors = 16;
 
 }  // namespace duet::detail::ranges

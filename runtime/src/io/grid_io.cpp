@@ -232,6 +232,12 @@ struct MapYaml {
   MapMode mode = MapMode::kTrinary;
 };
 
+std::string format_limit(float v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", static_cast<double>(v));
+  return buf;
+}
+
 MapYaml parse_map_yaml(const fs::path& yaml_path) {
   YAML::Node root;
   const std::string yaml_text = read_whole_file(yaml_path, input_limits::kYamlBytes, "map YAML");
@@ -276,15 +282,17 @@ MapYaml parse_map_yaml(const fs::path& yaml_path) {
       have_image = true;
     } else if (key == "resolution") {
       y.resolution = number(key, v);
-      if (!(y.resolution > 0.0) || !(static_cast<float>(y.resolution) > 0.0f) || y.resolution > 1e6) {
-        key_error(key, v, "must be in (0, 1e6] m per cell, got " + scalar_text(key, v));
+      if (!(y.resolution >= kMinGridResolutionM && y.resolution <= kMaxGridResolutionM)) {  // grid.hpp's limits
+        key_error(key, v, "must be in [" + format_limit(kMinGridResolutionM) + ", " + format_limit(kMaxGridResolutionM) +
+                              "] m per cell, got " + scalar_text(key, v));
       }
       have_resolution = true;
     } else if (key == "origin") {
       if (!v.IsSequence() || v.size() != 3) key_error(key, v, "expected [x, y, yaw]");
       for (std::size_t i = 0; i < 3; ++i) {
         y.origin[i] = number(key, v[i]);
-        if (i < 2 && std::abs(y.origin[i]) > 1e9) key_error(key, v, "coordinate out of range (|x|, |y| <= 1e9 m)");
+        if (i < 2 && !(std::abs(y.origin[i]) <= kMaxCoordinateM))
+          key_error(key, v, "coordinate out of range (|x|, |y| <= " + format_limit(kMaxCoordinateM) + " m, the map frame's limit)");
       }
       if (y.origin[2] != 0.0) {
         fail_file(ErrorCode::kUnsupported, yaml_path,

@@ -14,16 +14,32 @@
 #include <duet/kernels/types.hpp>
 
 #include <cstdint>
+#include <cmath>
 #include <limits>
 #include <span>
 #include <vector>
 
 namespace duet {
 
+/// The map frame's limits (a contract: checked where data enters). A cell is 1 mm to 100 m wide;
+/// coordinates - points, poses, grid bounds - lie within +-10 km of the origin, where a float
+/// still resolves 1 mm (its spacing at 1e4 is 0.98 mm), far beyond any building. A grid with
+/// another resolution or bounds beyond them is refused (kInvalidArgument / kOutOfRange); map
+/// points beyond them are dropped like points out of range.
+inline constexpr float kMinGridResolutionM = 1e-3f;
+inline constexpr float kMaxGridResolutionM = 100.0f;
+inline constexpr float kMaxCoordinateM = 1e4f;
+
+/// Whether |x| and |y| are within kMaxCoordinateM (false for NaN).
+[[nodiscard]] inline bool within_map_limits(const Eigen::Vector2f& p) noexcept {
+  return std::fabs(p.x()) <= kMaxCoordinateM && std::fabs(p.y()) <= kMaxCoordinateM;
+}
+
 class OccupancyGrid {
  public:
   static constexpr float kUnknown = std::numeric_limits<float>::quiet_NaN();
 
+  /// resolution_m in [kMinGridResolutionM, kMaxGridResolutionM].
   explicit OccupancyGrid(float resolution_m = 0.05f);
   /// An all-unknown grid of width x height cells whose cell (0,0) starts at origin [m].
   OccupancyGrid(float resolution_m, Eigen::Vector2f origin, int width, int height);
@@ -49,7 +65,7 @@ class OccupancyGrid {
 
   /// Grows (never shrinks) so that [lo, hi] plus margin_cells is inside; existing cells keep
   /// their world position. Throws duet::Error(kOutOfRange) if the grid would exceed
-  /// max_cells (default 2^28 cells = 1 GiB) or the coordinates are not finite.
+  /// max_cells (default 2^28 cells = 1 GiB) or the coordinates are beyond kMaxCoordinateM.
   void ensure_contains(const Eigen::Vector2f& lo, const Eigen::Vector2f& hi, int margin_cells,
                        std::size_t max_cells = std::size_t{1} << 28);
 
