@@ -444,6 +444,16 @@ TEST(RgbdDatasetErrors, GapInTheFrameNumbersIsNamedNotPairedByRank) {
   expect_contains(e.what(), "3.png: missing frame: the frames jump from 2 to 4");
 }
 
+TEST(RgbdDatasetErrors, FarPoseIsNamedWithItsLine) {
+  // A pose of 1e30 m failed inside the voxel filter, naming no file.
+  TempDir tmp;
+  make_slambook(tmp.path(), 2);
+  write_text(tmp.path() / "pose.txt", "0 0 0 0 0 0 1\n1e30 0 0 0 0 0 1\n");
+  const duet::Error e = open_error(tmp.path());
+  EXPECT_EQ(e.code(), duet::ErrorCode::kParse);
+  expect_contains(e.what(), "pose.txt:2: the camera position (1e+30, 0, 0) m is beyond the map frame's limit");
+}
+
 TEST(RgbdDatasetErrors, FrameIndexOutOfRange) {
   TempDir tmp;
   make_slambook(tmp.path(), 1);

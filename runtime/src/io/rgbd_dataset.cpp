@@ -1,6 +1,7 @@
 /// @file rgbd_dataset.cpp
 /// RGB-D sequences on disk -> RgbdFrame (see rgbd_dataset.hpp for the layouts).
 #include <duet/kernels/error.hpp>
+#include <duet/kernels/grid.hpp>
 #include <duet/runtime/io/rgbd_dataset.hpp>
 #include <duet/runtime/io/input_limits.hpp>
 
@@ -99,6 +100,15 @@ std::string fmt(double v) {
   return os.str();
 }
 
+/// A camera position within the map frame's limits (grid.hpp: +-10 km); else a parse error
+/// naming the file and line - not a kernel's error far downstream.
+void check_translation(const Eigen::Vector3d& t, const std::string& where) {
+  for (int i = 0; i < 3; ++i)
+    if (!(std::fabs(t[i]) <= static_cast<double>(kMaxCoordinateM)))
+      fail(ErrorCode::kParse, where + ": the camera position (" + fmt(t.x()) + ", " + fmt(t.y()) + ", " + fmt(t.z()) +
+                                  ") m is beyond the map frame's limit of +-" + fmt(kMaxCoordinateM) + " m");
+}
+
 /// "tx ty tz qx qy qz qw" (camera -> world) as in TUM / slambook2.
 Eigen::Isometry3f pose_from_tum_line(const std::vector<std::string>& toks, const std::string& where, float tol) {
   if (toks.size() != 7)
@@ -114,6 +124,7 @@ Eigen::Isometry3f pose_from_tum_line(const std::vector<std::string>& toks, const
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = q.toRotationMatrix();
   T.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
+  check_translation(T.translation(), where);
   return T.cast<float>();
 }
 
@@ -137,6 +148,7 @@ Eigen::Isometry3f pose_from_matrix_file(const fs::path& p, float tol) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = svd.matrixU() * svd.matrixV().transpose();
   T.translation() = M.topRightCorner<3, 1>();
+  check_translation(T.translation(), p.string());
   return T.cast<float>();
 }
 
