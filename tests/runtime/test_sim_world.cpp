@@ -392,3 +392,17 @@ TEST(SimWorldMap, WillowGarageOfficeBecomesAWorld) {
   // An office floor: hundreds of square metres reachable.
   EXPECT_GT(static_cast<double>(reach) * 0.01, 200.0);
 }
+
+TEST(SimWorld, TooLargeAFloorNamesTheWorldFile) {
+  // It said "rasterize: the floor is too large" without the file.
+  const duet::sim::World w = duet::sim::parse_world(
+      "name: big\nfloor: {min: [0, 0], max: [9000, 9000]}\nstart: [1.0, 1.0, 0.0]\n", "my/big.yaml");
+  try {
+    (void)duet::sim::rasterize(w, 0.05f);
+    FAIL() << "no error";
+  } catch (const duet::Error& e) {
+    EXPECT_EQ(e.code(), duet::ErrorCode::kOutOfRange);
+    EXPECT_NE(std::string(e.what()).find("my/big.yaml: world 'big': the floor (9000 x 9000 m) is too large"), std::string::npos)
+        << e.what();
+  }
+}

@@ -97,7 +97,9 @@ TruthGrid rasterize(const World& world, float resolution_m, float z_low_m, float
   const Eigen::Vector2f ext = world.floor.max - world.floor.min;
   const double cells = std::ceil(static_cast<double>(ext.x()) / resolution_m) * std::ceil(static_cast<double>(ext.y()) / resolution_m);
   if (!(cells <= static_cast<double>(1u << 28)))
-    fail(ErrorCode::kOutOfRange, "rasterize: the floor is too large for " + format_number(resolution_m) + " m cells");
+    fail(ErrorCode::kOutOfRange, world.source + ": world '" + world.name + "': the floor (" + format_number(ext.x()) + " x " +
+                                     format_number(ext.y()) + " m) is too large for " + format_number(resolution_m) +
+                                     " m cells (at most 2^28 cells)");
   g.width = static_cast<int>(std::ceil(ext.x() / resolution_m - 1e-4f));
   g.height = static_cast<int>(std::ceil(ext.y() / resolution_m - 1e-4f));
   g.occupied.assign(static_cast<std::size_t>(g.width) * g.height, 0);
