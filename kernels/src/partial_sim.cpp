@@ -127,6 +127,21 @@ void validate(const PartialSimSettings& s) {
   if (!finite(s.max_goal_distance_m) || !(s.max_goal_distance_m > s.min_goal_distance_m))
     bad("max_goal_distance_m", s.max_goal_distance_m, "(min_goal_distance_m, inf)");
   if (!finite(s.collision_step_m) || !(s.collision_step_m > 0.0f)) bad("collision_step_m", s.collision_step_m, "(0, inf)");
+  // Work budgets (issue 19: a range bounds the work it causes). Defaults use 20 sub-steps per
+  // stage and 8000 particle-sample-stages per call (about 25 ms on 2 cores on a real state);
+  // the budgets allow 500x and 125x that, so one call stays within a few seconds.
+  const double sub_steps = static_cast<double>(s.v_max_mps) * s.stage_dt_s / s.collision_step_m;
+  if (!(sub_steps <= kMaxRolloutSubSteps))
+    fail(ErrorCode::kInvalidArgument, "PartialSimSettings: v_max_mps * stage_dt_s / collision_step_m = " + std::to_string(sub_steps) +
+                                          " rollout sub-steps per stage, more than the budget of " +
+                                          std::to_string(static_cast<long>(kMaxRolloutSubSteps)) + " (raise collision_step_m)");
+  double samples = 0.0;
+  for (int i = 1; i <= s.iterations; ++i) samples += static_cast<double>(s.phi_a) * i + s.phi_b;
+  const double work = static_cast<double>(s.particles) * samples * s.stages;
+  if (!(work <= kMaxParticleSampleStages))
+    fail(ErrorCode::kInvalidArgument, "PartialSimSettings: particles * sum_i(phi_i) * stages = " + std::to_string(static_cast<long long>(work)) +
+                                          ", more than the budget of " + std::to_string(static_cast<long>(kMaxParticleSampleStages)) +
+                                          " simulated observations per decision");
 }
 
 namespace {

@@ -390,6 +390,32 @@ TEST(PartialSim, AllRolloutsRejectedGivesNoGoal) {
   EXPECT_EQ(r.goal.x, 2.3f);
 }
 
+TEST(PartialSim, SettingsThatWouldTakeMinutesAreRefusedByTheBudgets) {
+  // Each passed validation and made one call take minutes (issue 19): a tiny collision step, a
+  // huge particle count. The budgets name the product they bound.
+  auto message = [](const PartialSimSettings& s) {
+    try {
+      validate(s);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  PartialSimSettings s;
+  EXPECT_EQ(message(s), "");
+  s.collision_step_m = 1e-9f;
+  EXPECT_NE(message(s).find("rollout sub-steps per stage, more than the budget"), std::string::npos) << message(s);
+  s.collision_step_m = 0.0001f;  // 5000 sub-steps: within the budget
+  EXPECT_EQ(message(s), "");
+  s = {};
+  s.particles = 100000;
+  s.iterations = 10;
+  EXPECT_NE(message(s).find("simulated observations per decision"), std::string::npos) << message(s);
+  s = {};
+  s.particles = 12500;  // 12500 * 20 * 4 = 1e6: exactly the budget
+  EXPECT_EQ(message(s), "");
+}
+
 TEST(PartialSim, InvalidInputsThrow) {
   const TestGrid g = door_room();
   Prepared p(g);
