@@ -49,9 +49,11 @@ void validate(const SensorSector& s) {
     fail(ErrorCode::kInvalidArgument, "SensorSector.fov_rad must be in (0, 2 pi], got " + fstr(s.fov_rad));
   if (!(s.min_range_m >= 0.0f) || !std::isfinite(s.min_range_m))
     fail(ErrorCode::kInvalidArgument, "SensorSector.min_range_m must be finite and >= 0, got " + fstr(s.min_range_m));
-  if (!(s.max_range_m >= s.min_range_m) || !std::isfinite(s.max_range_m))
-    fail(ErrorCode::kInvalidArgument, "SensorSector.max_range_m must be finite and >= min_range_m (" +
-                                          fstr(s.min_range_m) + "), got " + fstr(s.max_range_m));
+  // At most kMaxSensorRangeM: a ray walks range / cell cells, also beyond the grid (unknown), so
+  // the range bounds the work of every walk (1e30 m walked for ever).
+  if (!(s.max_range_m >= s.min_range_m) || !(s.max_range_m <= kMaxSensorRangeM))
+    fail(ErrorCode::kInvalidArgument, "SensorSector.max_range_m must be in [min_range_m (" + fstr(s.min_range_m) + "), " +
+                                          fstr(kMaxSensorRangeM) + "] m, got " + fstr(s.max_range_m));
   if (s.rays < 1 || s.rays > 100000)
     fail(ErrorCode::kInvalidArgument, "SensorSector.rays must be in [1, 100000], got " + std::to_string(s.rays));
 }

@@ -484,6 +484,8 @@ TEST(SensorSectors, InvalidFieldsThrow) {
   bad([](SensorSector& s) { s.min_range_m = -0.1f; }, "min_range_m");
   bad([](SensorSector& s) { s.max_range_m = 0.4f; }, "max_range_m");
   bad([](SensorSector& s) { s.max_range_m = test::kInf; }, "max_range_m");
+  bad([](SensorSector& s) { s.max_range_m = 1e30f; }, "max_range_m");  // walked for ever before
+  bad([](SensorSector& s) { s.max_range_m = 100.5f; }, "max_range_m");
   bad([](SensorSector& s) { s.rays = 0; }, "rays");
   bad([](SensorSector& s) { s.x_m = kNaN; }, "x_m");
   EXPECT_DUET_ERROR(validate(std::span<const SensorSector>()), ErrorCode::kInvalidArgument, "sensors");

@@ -50,6 +50,10 @@
 
 namespace duet {
 
+/// The longest sensor range a SensorSector may have [m] (the profile's depth limit too): a
+/// ray's walk is range / cell cells long, so the range bounds the work of every walk.
+inline constexpr float kMaxSensorRangeM = 100.0f;
+
 /// One sensor's horizontal fan, in the robot frame (paper §3.1: a sector of radius max range and
 /// centre angle = the horizontal field of view; Eq. 6 for the extrinsics).
 struct SensorSector {
@@ -57,7 +61,7 @@ struct SensorSector {
   float yaw_rad = 0.0f;                ///< optical axis yaw in the robot frame [rad] (Eq. 6)
   float fov_rad = 0.99483767f;         ///< horizontal field of view, 57 deg [rad], in (0, 2 pi]
   float min_range_m = 0.5f;            ///< cells nearer than this are not observed [m], >= 0
-  float max_range_m = 5.0f;            ///< [m], >= min_range_m, finite
+  float max_range_m = 5.0f;            ///< [m], in [min_range_m, kMaxSensorRangeM]
   int rays = 30;                       ///< rays in the fan, in [1, 100000]
 };
 
