@@ -283,28 +283,9 @@ PathProjection project_on_path(std::span<const Eigen::Vector2f> path, const Eige
   return r;
 }
 
-namespace {
-DwaResult dwa_step_in_window(const ClearanceView& clearance, const Pose2& pose, const Twist& current,
-                             std::span<const Eigen::Vector2f> path, const DwaSettings& s, DwaState& state,
-                             DwaWorkspace& ws);
-}  // namespace
-
 DwaResult dwa_step(const ClearanceView& clearance, const Pose2& pose, const Twist& current,
                    std::span<const Eigen::Vector2f> path, const DwaSettings& s, DwaState& state,
                    DwaWorkspace& ws) {
-  DwaResult r = dwa_step_in_window(clearance, pose, current, path, s, state, ws);
-  // The windows are within the chassis limits (axis_window); this guards every other command
-  // (recovery, rotation) the same way: with a measured glitch of 100 m/s the command is the
-  // limit, not 99.95 m/s.
-  r.cmd.v = std::clamp(r.cmd.v, s.limits.min_v_mps, s.limits.max_v_mps);
-  r.cmd.omega = std::clamp(r.cmd.omega, -s.limits.max_omega_rps, s.limits.max_omega_rps);
-  return r;
-}
-
-namespace {
-DwaResult dwa_step_in_window(const ClearanceView& clearance, const Pose2& pose, const Twist& current,
-                             std::span<const Eigen::Vector2f> path, const DwaSettings& s, DwaState& state,
-                             DwaWorkspace& ws) {
   validate(s);
   validate_view(clearance);
   if (!std::isfinite(pose.x) || !std::isfinite(pose.y) || !std::isfinite(pose.theta))
@@ -545,6 +526,5 @@ DwaResult dwa_step_in_window(const ClearanceView& clearance, const Pose2& pose, 
   r.evaluated_trajectories = nv * nw;
   return r;
 }
-}  // namespace
 
 }  // namespace duet

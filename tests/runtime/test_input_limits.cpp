@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include "runtime_test_util.hpp"
+
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -23,12 +25,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("duet_test_limits_" + std::to_string(::getpid())) / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
+using duet_test::TempDir;
 
 void expect_refused(const std::function<void()>& read, const std::string& path, const std::string& words) {
   try {
@@ -45,7 +42,8 @@ void expect_refused(const std::function<void()>& read, const std::string& path, 
 }  // namespace
 
 TEST(InputLimits, EveryReaderRefusesAFifoAtOnce) {
-  const fs::path d = fresh_dir("fifo");
+  const TempDir tmp;
+  const fs::path& d = tmp.path();
   for (const char* name : {"a.pcd", "a.ply", "map.yaml", "world.yaml", "profile.yaml"})
     ASSERT_EQ(::mkfifo((d / name).c_str(), 0600), 0) << name;  // nobody writes: reading would block forever
   const std::string fifo = "a FIFO (named pipe), not a regular file";
@@ -63,7 +61,8 @@ TEST(InputLimits, DevicesAreRefusedWhereverTheyAreNamed) {
   // before; /dev/null is a device too.
   expect_refused([] { (void)duet::load_profile("/dev/zero"); }, "/dev/zero", "the profile is a character device");
   expect_refused([] { (void)duet::read_pcd("/dev/null"); }, "/dev/null", "a character device, not a regular file");
-  const fs::path d = fresh_dir("devices");
+  const TempDir tmp;
+  const fs::path& d = tmp.path();
   std::ofstream(d / "map.yaml") << "image: /dev/zero\nresolution: 0.05\norigin: [0, 0, 0]\nnegate: 0\n"
                                    "occupied_thresh: 0.65\nfree_thresh: 0.196\n";
   expect_refused([&] { (void)duet::read_map_server(d / "map.yaml"); }, "/dev/zero", "the map image is a character device");
@@ -71,7 +70,8 @@ TEST(InputLimits, DevicesAreRefusedWhereverTheyAreNamed) {
 }
 
 TEST(InputLimits, FilesOverTheLimitAreRefusedBeforeTheyAreRead) {
-  const fs::path d = fresh_dir("huge");
+  const TempDir tmp;
+  const fs::path& d = tmp.path();
   // Sparse files: the size is there, the disk space is not.
   auto sparse = [&](const char* name, std::uintmax_t bytes) {
     std::ofstream(d / name) << "x";
@@ -94,7 +94,8 @@ TEST(InputLimits, FilesOverTheLimitAreRefusedBeforeTheyAreRead) {
 
 TEST(InputLimits, RgbdFoldersNameAFifoListOrFrame) {
   // A slambook2 folder whose pose list is a FIFO, and one whose depth frame is a device.
-  const fs::path d = fresh_dir("rgbd");
+  const TempDir tmp;
+  const fs::path& d = tmp.path();
   fs::create_directories(d / "color");
   fs::create_directories(d / "depth");
   ASSERT_EQ(::mkfifo((d / "pose.txt").c_str(), 0600), 0);

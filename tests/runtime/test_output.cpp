@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "runtime_test_util.hpp"
+
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -21,17 +23,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("duet_test_output_" + std::to_string(::getpid())) / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>()};
-}
+using duet_test::slurp;
+using duet_test::TempDir;
 
 std::size_t files_in(const fs::path& d) {
   std::size_t n = 0;
@@ -42,7 +35,8 @@ std::size_t files_in(const fs::path& d) {
 }  // namespace
 
 TEST(Output, WriteTextFileReplacesTheFileWholeAndLeavesNoTemporary) {
-  const fs::path d = fresh_dir("replace");
+  const TempDir tmp;
+  const fs::path& d = tmp.path();
   duet::write_text_file(d / "a.txt", "first version\n");
   EXPECT_EQ(slurp(d / "a.txt"), "first version\n");
   duet::write_text_file(d / "a.txt", "");
@@ -60,7 +54,8 @@ TEST(Output, WriteTextFileReplacesTheFileWholeAndLeavesNoTemporary) {
 }
 
 TEST(Output, AWriterKilledMidWriteLeavesThePreviousFileOrTheNewOneWhole) {
-  const fs::path d = fresh_dir("killed");
+  const TempDir tmp;
+  const fs::path& d = tmp.path();
   const fs::path target = d / "map.bin";
   const std::string previous = "the previous map\n";
   duet::write_text_file(target, previous);
@@ -99,7 +94,8 @@ TEST(Output, AWriterKilledMidWriteLeavesThePreviousFileOrTheNewOneWhole) {
 }
 
 TEST(Output, PrepareOutputDirCreatesAndChecksTheFolder) {
-  const fs::path d = fresh_dir("prepare");
+  const TempDir tmp;
+  const fs::path& d = tmp.path();
   duet::prepare_output_dir(d / "a" / "b");
   EXPECT_TRUE(fs::is_directory(d / "a" / "b"));
   EXPECT_EQ(files_in(d / "a" / "b"), 0u);  // the probe is gone

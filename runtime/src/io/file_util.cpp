@@ -36,7 +36,7 @@ std::string mib(std::uintmax_t bytes) {
 }
 }  // namespace
 
-void check_input_file(const fs::path& path, std::uintmax_t max_bytes, const char* what) {
+std::uintmax_t check_input_file(const fs::path& path, std::uintmax_t max_bytes, const char* what) {
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);  // follows symbolic links
   if (ec || st.type() == fs::file_type::not_found) {
@@ -49,10 +49,11 @@ void check_input_file(const fs::path& path, std::uintmax_t max_bytes, const char
   if (ec) fail_file(ErrorCode::kIo, path, std::string("cannot read the size of the ") + what + ": " + ec.message());
   if (size > max_bytes)
     fail_file(ErrorCode::kIo, path, std::string("the ") + what + " is " + mib(size) + "; the limit is " + mib(max_bytes));
+  return size;
 }
 
 std::string read_whole_file(const fs::path& path, std::uintmax_t max_bytes, const char* what) {
-  check_input_file(path, max_bytes, what);
+  const std::uintmax_t size = check_input_file(path, max_bytes, what);
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (f == nullptr) {
     fail_file(ErrorCode::kIo, path, std::string("cannot open for reading: ") + std::strerror(errno));
@@ -61,11 +62,7 @@ std::string read_whole_file(const fs::path& path, std::uintmax_t max_bytes, cons
   bool too_big = false;
   try {
     char buf[1 << 16];
-    if (std::fseek(f, 0, SEEK_END) == 0) {
-      const long size = std::ftell(f);
-      if (size > 0 && static_cast<std::uintmax_t>(size) <= max_bytes) data.reserve(static_cast<std::size_t>(size));
-      std::rewind(f);
-    }
+    data.reserve(static_cast<std::size_t>(size));
     for (;;) {
       const std::size_t got = std::fread(buf, 1, sizeof buf, f);
       data.append(buf, got);

@@ -14,8 +14,8 @@ namespace duet::detail {
 [[noreturn]] void fail_file(ErrorCode code, const std::filesystem::path& path, const std::string& what);
 
 /// Checks what every reader accepts (input_limits.hpp): a regular file of at most max_bytes;
-/// else kIo naming the file, what it is (`what`: "PCD file", "profile", ...) and the limit.
-void check_input_file(const std::filesystem::path& path, std::uintmax_t max_bytes, const char* what);
+/// else kIo naming the file, what it is (`what`: "PCD file", "profile", ...) and the limit. Returns its size.
+std::uintmax_t check_input_file(const std::filesystem::path& path, std::uintmax_t max_bytes, const char* what);
 
 /// The whole file after check_input_file() (and never more than max_bytes of it, should it grow
 /// while read); kIo naming the file when it cannot be read, kOutOfMemory when it does not fit.

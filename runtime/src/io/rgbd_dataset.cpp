@@ -51,7 +51,7 @@ bool is_file(const fs::path& p) {
 void require_file(const fs::path& p, const std::string& missing, std::uintmax_t max_bytes, const char* what) {
   std::error_code ec;
   if (!fs::exists(p, ec)) fail(ErrorCode::kIo, p.string() + ": " + missing);
-  detail::check_input_file(p, max_bytes, what);
+  (void)detail::check_input_file(p, max_bytes, what);
 }
 
 std::string read_text(const fs::path& p) { return detail::read_whole_file(p, input_limits::kTextBytes, "text file"); }
