@@ -276,7 +276,7 @@ int KdTree::knn_impl(const Eigen::Vector3f& q, int k, float max_dist2, std::uint
       while (true) {
         const Node& nd = nodes_[ni];
         if (nd.dim < 0) {
-          scan_points(xs_.data(), ys_.data(), zs_.data(), nd.a, nd.b, q, best);
+          scan_points(xs_.data(), ys_.data(), zs_.data(), nd.a, scan_end(nd, k), q, best);
           break;
         }
         const float diff = q[nd.dim] - nd.split;
@@ -369,6 +369,14 @@ std::uint32_t KdTree::knn_leaf(std::size_t l, int k, LeafKnn& ws, bool sorted) c
     ws.order.resize(m);
     for (std::uint32_t i = 0; i < m; ++i) ws.order[start[ws.bucket[i]]++] = i;
   }
+  // The home's points, leaf by leaf (a uniform leaf offers only its first k).
+  const auto scan_home = [&](const Eigen::Vector3f& q, KSet& best) {
+    for (std::uint32_t p = hb.begin; p < hb.end;) {
+      const Node& nd = nodes_[leaf_node_[leaf_of_[p]]];
+      scan_points(xs, ys, zs, p, scan_end(nd, k), q, best);
+      p = nd.b;
+    }
+  };
   float r2 = 0.0f;
   for (std::uint32_t oi = 0; oi < m; ++oi) {
     const std::uint32_t i = ws.order[oi];
@@ -383,10 +391,10 @@ std::uint32_t KdTree::knn_leaf(std::size_t l, int k, LeafKnn& ws, bool sorted) c
       bound = far * 1.0001f + std::numeric_limits<float>::min();
     }
     KSet best(k, bound, key, pos, ids);
-    scan_points(xs, ys, zs, hb.begin, hb.end, q, best);
+    scan_home(q, best);
     if (static_cast<std::uint32_t>(best.count) < want) {  // cannot happen (the bound holds k points); be safe
       best = KSet(k, kInf, key, pos, ids);
-      scan_points(xs, ys, zs, hb.begin, hb.end, q, best);
+      scan_home(q, best);
     }
     ws.count[i] = best.count;
     r2 = std::max(r2, best.worst());
@@ -441,8 +449,7 @@ std::uint32_t KdTree::knn_leaf(std::size_t l, int k, LeafKnn& ws, bool sorted) c
     box_dists(cb, nc4, q, cd);
     for (std::size_t c = 0; c < nc; ++c) {
       if (cd[c] > best.worst() * kPruneSlack) continue;
-      const Box& b = boxes_[ws.cand[c]];
-      scan_points(xs, ys, zs, b.begin, b.end, q, best);
+      scan_points(xs, ys, zs, boxes_[ws.cand[c]].begin, scan_end(nodes_[ws.cand[c]], k), q, best);
     }
     ws.count[i] = best.finish(ws.dist2.data() + i * ku, sorted);
     prev_full = ws.count[i] == k;

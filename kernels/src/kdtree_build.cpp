@@ -130,6 +130,10 @@ void KdTree::build(PointsView points, const KdTreeSettings& settings) {
         return idx;
       }
       node.dim = -1;
+      if (count > static_cast<std::uint32_t>(t.leaf_size_)) {  // all identical (zero extent)
+        std::sort(items + begin, items + end, [](const Item& x, const Item& y) { return x.id < y.id; });
+        node.dim = kUniformLeaf;
+      }
       node.a = begin;
       node.b = end;
       return idx;

@@ -518,3 +518,51 @@ TEST(KdTree, LeafBatchKnnIdenticalWithOneAndTwoThreads) {
 
 }  // namespace
 }  // namespace duet
+
+namespace duet {
+namespace {
+
+// Degenerate inputs (issue 19): all points identical, most identical plus a few others, several
+// heavy clusters of duplicates, all in one millimetre voxel, collinear. Identical points end in
+// leaves that no split separates; the searches stay exact (brute force, ties by index) and the
+// leaf batch equals knn_tree.
+std::vector<std::vector<Eigen::Vector3f>> degenerate_clouds() {
+  std::vector<std::vector<Eigen::Vector3f>> c;
+  c.emplace_back(3000, Eigen::Vector3f(0.5f, -1.25f, 2.0f));
+  auto most = test::random_points(3200, 201, -1.0f, 1.0f);
+  for (std::size_t i = 0; i < 3000; ++i) most[(i * 7919) % most.size()] = Eigen::Vector3f(0.25f, 0.25f, 0.25f);
+  c.push_back(most);
+  std::vector<Eigen::Vector3f> clusters;
+  for (int i = 0; i < 3000; ++i) clusters.emplace_back(static_cast<float>(i % 5) * 0.125f, 0.0f, static_cast<float>(i % 3) * 0.5f);
+  c.push_back(clusters);
+  auto voxel = test::random_points(3000, 202, 0.0f, 1e-3f);
+  c.push_back(voxel);
+  std::vector<Eigen::Vector3f> line;
+  for (int i = 0; i < 3000; ++i) line.emplace_back(static_cast<float>(i % 700) * 0.01f, 0.0f, 0.0f);
+  c.push_back(line);
+  return c;
+}
+
+TEST(KdTree, DegenerateInputsStayExact) {
+  const auto clouds = degenerate_clouds();
+  for (std::size_t ci = 0; ci < clouds.size(); ++ci) {
+    const auto& pts = clouds[ci];
+    for (const int leaf : {1, 8, 48}) {
+      KdTreeSettings s;
+      s.max_leaf_size = leaf;
+      const KdTree tree(pts, s);
+      const std::string what = "cloud " + std::to_string(ci) + " leaf " + std::to_string(leaf);
+      SCOPED_TRACE(what);
+      for (std::size_t qi = 0; qi < pts.size(); qi += 97) {
+        const auto all = brute_all(pts, pts[qi]);
+        for (const int k : {1, 10, 33}) check_knn(tree, pts, pts[qi], k, &all);
+      }
+      const Eigen::Vector3f off(0.3f, -0.2f, 0.1f);
+      for (const int k : {1, 10, 100}) check_knn(tree, pts, pts[0] + off, k);
+      for (const int k : {1, 10, 33}) check_knn_leaf(tree, k, what.c_str());
+    }
+  }
+}
+
+}  // namespace
+}  // namespace duet

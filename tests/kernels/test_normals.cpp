@@ -165,6 +165,26 @@ TEST(Normals, MatchBruteForceReferenceWithAnyLeafSize) {
   compare_with_reference(tiny, 10, Eigen::Vector3f::Zero(), 1, "tiny");
 }
 
+TEST(Normals, HeavyDuplicatesMatchTheReferenceAndStayLinear) {
+  // Most points identical (a stuck sensor, a zero-depth frame back-projected to one point): the
+  // identical ones share one leaf no split separates. Exact against brute force on a small cloud,
+  // and 200k identical points (over a minute before the uniform leaves; issue 19) give NaN normals.
+  auto cloud = noisy_sphere(1200, 13, 0.5f, 0.002f);
+  for (std::size_t i = 0; i < 1000; ++i) cloud[(i * 7) % cloud.size()] = cloud[3];
+  compare_with_reference(cloud, 10, Eigen::Vector3f::Zero(), 1, "sphere with 1000 duplicates");
+  PointCloud same;
+  same.points.assign(test::full_or<std::size_t>(200000, 50000), Eigen::Vector3f(0.1f, 0.2f, 1.5f));
+  for (int i = 0; i < 500; ++i)  // and a plane beside them
+    same.points.emplace_back(0.01f * static_cast<float>(i % 25), 0.01f * static_cast<float>(i / 25) + 1.0f, 2.0f);
+  estimate_normals(same, {});
+  const std::size_t dups = same.size() - 500;
+  std::size_t nan = 0, plane_ok = 0;
+  for (std::size_t i = 0; i < dups; ++i) nan += std::isnan(same.normals[i].x()) && std::isnan(same.curvature[i]) ? 1 : 0;
+  for (std::size_t i = dups; i < same.size(); ++i) plane_ok += std::abs(std::abs(same.normals[i].z()) - 1.0f) < 1e-4f ? 1 : 0;
+  EXPECT_EQ(nan, dups);
+  EXPECT_EQ(plane_ok, 500u);
+}
+
 TEST(Normals, MatchBruteForceReferenceOnRealData) {
   if (test::have_data("rgbd/slambook2_ch5/depth/1.pgm")) {
     const PointCloud raw = test::slambook_cloud(1);

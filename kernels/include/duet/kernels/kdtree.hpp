@@ -104,7 +104,7 @@ class KdTree {
   struct Node {
     // Leaf: begin/end into pts_. Inner: split dimension and value, children indices.
     float split = 0.0f;
-    std::int32_t dim = -1;  // -1 = leaf
+    std::int32_t dim = -1;  // -1 = leaf, kUniformLeaf = a leaf of identical points
     std::uint32_t a = 0;    // leaf: begin, inner: left child
     std::uint32_t b = 0;    // leaf: end,   inner: right child
   };
@@ -118,6 +118,15 @@ class KdTree {
     Eigen::Vector3f lo, hi;    // its cell
   };
   static constexpr std::uint32_t kNoHint = 0xFFFFFFFFu;
+  // A leaf of more than max_leaf_size identical points (no split can separate them), sorted by
+  // input index: their distances to any query are equal, so their k smallest keys (distance,
+  // index) are the first k - a scan stops there, and knn stays O(k) per such leaf instead of
+  // O(leaf) (48k duplicate points took 9 s of normals before; issue 19).
+  static constexpr std::int32_t kUniformLeaf = -2;
+  // End of the positions of leaf nd a k-nearest scan must offer.
+  static std::uint32_t scan_end(const Node& nd, int k) noexcept {
+    return nd.dim == kUniformLeaf && nd.b - nd.a > static_cast<std::uint32_t>(k) ? nd.a + static_cast<std::uint32_t>(k) : nd.b;
+  }
   int knn_impl(const Eigen::Vector3f& q, int k, float max_dist2, std::uint32_t hint, std::uint32_t* tree_pos,
                float* dist2) const;
   void index_leaf_starts(std::uint32_t m);
