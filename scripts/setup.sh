@@ -12,6 +12,9 @@ pkgs=(build-essential cmake pkg-config
       libeigen3-dev libembree-dev libtbb-dev libopencv-dev libpcl-dev
       libbenchmark-dev libgtest-dev libgmock-dev libyaml-cpp-dev libspdlog-dev libcli11-dev
       liblzf-dev nlohmann-json3-dev libpng-dev)
+# DUET_EXTRA_PKGS: more packages a caller needs (scripts/fuzz.sh: clang and libFuzzer).
+read -r -a extra_pkgs <<< "${DUET_EXTRA_PKGS:-}"
+pkgs+=("${extra_pkgs[@]}")
 
 missing=()
 for p in "${pkgs[@]}"; do

@@ -6,7 +6,9 @@
 #      own: the runtime's background mode and its worker, the clocks. They run their TBB work in
 #      one-thread arenas: Debian's TBB is not instrumented, so TSan cannot see TBB's own
 #      synchronisation (its parallel loops would show as races).
-# Usage: scripts/test.sh            both passes
+#   4. Fuzzing                  (build-fuzz/),  every libFuzzer target (clang, ASan + UBSan +
+#      LeakSanitizer) for DUET_FUZZ_SECONDS (default 20) seconds each: scripts/fuzz.sh.
+# Usage: scripts/test.sh            all passes
 #        DUET_SKIP_SANITIZERS=1 scripts/test.sh   only the Release pass
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -29,4 +31,7 @@ if [ "${DUET_SKIP_SANITIZERS:-0}" != 1 ]; then
     "$here/scripts/setup.sh" "$here/build-tsan" -DDUET_SANITIZE_THREAD=ON -DDUET_BUILD_BENCH=OFF
   (cd "$here/build-tsan" && ctest --output-on-failure -j "$jobs" --timeout 1800 \
      -R '^(BackgroundWorker|BackgroundRuntime|Clock)\.')
+
+  echo "== duet: fuzzing, ${DUET_FUZZ_SECONDS:-20} s per target"
+  FUZZ_SEED=1 FUZZ_BUILD="$here/build-fuzz" "$here/scripts/fuzz.sh" "${DUET_FUZZ_SECONDS:-20}"
 fi

@@ -123,7 +123,8 @@ enum duet_error {
 
 /* Called synchronously, on the thread that made the failing call, before that call returns.
  * `message` is valid only during the callback. The callback must not throw (C++); it may call
- * duet functions, including on the same device. */
+ * duet functions, including on the same device. An error of a call made inside a callback is
+ * recorded as usual but calls no callback (no recursion). */
 typedef void (*duet_error_callback)(void* user_ptr, enum duet_error code, const char* message);
 
 /* Static name of an error code ("DUET_ERROR_INVALID_ARGUMENT"); "DUET_ERROR_?" for others. */

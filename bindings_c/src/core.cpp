@@ -199,12 +199,18 @@ void report(Device* device, duet_error code, const char* fn, const char* message
     user = g.user;
   }
   if (verbose) std::fprintf(stderr, "duet: %s: %s\n", duet_error_string(code), text.c_str());
-  if (cb != nullptr) {
+  // Not re-entered: an error raised by a duet call made inside a callback is recorded but calls
+  // no callback (found by fuzz_capi: a callback whose own call failed recursed until the stack
+  // overflowed).
+  static thread_local bool in_callback = false;
+  if (cb != nullptr && !in_callback) {
+    in_callback = true;
     try {
       cb(user, code, text.c_str());
     } catch (...) {
       // A C++ callback that throws must not unwind through C frames.
     }
+    in_callback = false;
   }
 }
 

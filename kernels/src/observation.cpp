@@ -4,6 +4,7 @@
 
 #include <duet/kernels/entropy.hpp>
 #include <duet/kernels/error.hpp>
+#include <duet/kernels/grid.hpp>
 
 #include "observation_model.hpp"
 #include "parallel.hpp"
@@ -45,6 +46,11 @@ std::vector<SensorSector> paper_dual_sensors(int rays_per_sensor) {
 void validate(const SensorSector& s) {
   if (!std::isfinite(s.x_m) || !std::isfinite(s.y_m) || !std::isfinite(s.yaw_rad))
     fail(ErrorCode::kInvalidArgument, "SensorSector: x_m, y_m, yaw_rad must be finite");
+  // A mount offset is within the sensor range limit (a sensor 3e38 m off the robot made Embree
+  // rays with infinite origins: found by fuzz_capi).
+  if (!(std::fabs(s.x_m) <= kMaxSensorRangeM) || !(std::fabs(s.y_m) <= kMaxSensorRangeM))
+    fail(ErrorCode::kInvalidArgument, "SensorSector: x_m, y_m must be within +-" + fstr(kMaxSensorRangeM) + " m of the robot, got " +
+                                          fstr(s.x_m) + ", " + fstr(s.y_m));
   if (!(s.fov_rad > 0.0f) || !(s.fov_rad <= 2.0f * std::numbers::pi_v<float>))
     fail(ErrorCode::kInvalidArgument, "SensorSector.fov_rad must be in (0, 2 pi], got " + fstr(s.fov_rad));
   if (!(s.min_range_m >= 0.0f) || !std::isfinite(s.min_range_m))
@@ -180,9 +186,10 @@ void check_rays(std::span<const Eigen::Vector2f> origins, std::span<const Eigen:
     fail(ErrorCode::kInvalidArgument, "ObservationModel::cast: need 0 <= t0 <= t1 < inf, got t0 = " + fstr(t0) +
                                           ", t1 = " + fstr(t1));
   for (std::size_t i = 0; i < origins.size(); ++i) {
-    if (!origins[i].allFinite() || !dirs[i].allFinite() || !(std::fabs(dirs[i].squaredNorm() - 1.0f) <= 2e-3f))
+    if (!within_map_limits(origins[i]) || !dirs[i].allFinite() || !(std::fabs(dirs[i].squaredNorm() - 1.0f) <= 2e-3f))
       fail(ErrorCode::kInvalidArgument, "ObservationModel::cast: ray " + std::to_string(i) +
-                                            ": origin must be finite and dir a unit vector (|dir| within 1e-3 of 1)");
+                                            ": origin must be within the map frame's +-" + fstr(kMaxCoordinateM) +
+                                            " m and dir a unit vector (|dir| within 1e-3 of 1)");
   }
 }
 }  // namespace
@@ -241,6 +248,9 @@ void ObservationModel::observe(std::span<const Pose2> poses, std::span<const Sen
   for (std::size_t p = 0; p < poses.size(); ++p)
     if (!std::isfinite(poses[p].x) || !std::isfinite(poses[p].y) || !std::isfinite(poses[p].theta))
       fail(ErrorCode::kInvalidArgument, "ObservationModel::observe: pose " + std::to_string(p) + " is not finite");
+    else if (!within_map_limits({poses[p].x, poses[p].y}))
+      fail(ErrorCode::kOutOfRange, "ObservationModel::observe: pose " + std::to_string(p) + " (" + fstr(poses[p].x) + ", " +
+                                       fstr(poses[p].y) + ") is beyond the map frame's +-" + fstr(kMaxCoordinateM) + " m");
   std::vector<std::size_t> first(sensors.size());
   for (std::size_t s = 0, acc = 0; s < sensors.size(); ++s) {
     first[s] = acc;

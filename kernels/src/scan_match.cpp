@@ -5,6 +5,7 @@
 // and interpolated bilinearly, so a candidate costs one rotation per angle (shared by all
 // translations) and four lookups per point.
 #include <duet/kernels/error.hpp>
+#include <duet/kernels/grid.hpp>
 #include <duet/kernels/scan_match.hpp>
 
 #include <tbb/blocked_range.h>
@@ -53,10 +54,16 @@ Field make_field(const ClearanceView& d, const Eigen::Vector2f& centre, float ra
   f.origin = d.origin;
   // Cells whose centres may be needed (+1 each side for the bilinear stencil), clipped to the
   // grid with one ring of zero cells outside it.
-  const auto lo = [&](float v, float o) { return static_cast<int>(std::floor((v - radius - o) / res)) - 1; };
-  const auto hi = [&](float v, float o) { return static_cast<int>(std::floor((v + radius - o) / res)) + 2; };
-  const int x0 = std::max(lo(centre.x(), d.origin.x()), -1), x1 = std::min(hi(centre.x(), d.origin.x()), d.width + 1);
-  const int y0 = std::max(lo(centre.y(), d.origin.y()), -1), y1 = std::min(hi(centre.y(), d.origin.y()), d.height + 1);
+  // In double and clamped to the grid before the cast: a window far off the grid (or wider than
+  // an int counts cells) must not overflow the cast (found by fuzz_capi with huge points).
+  const auto cell = [&](double v, int min, int max) {
+    return static_cast<int>(std::clamp(std::floor(v), static_cast<double>(min), static_cast<double>(max)));
+  };
+  const double r = radius;
+  const int x0 = cell((centre.x() - r - d.origin.x()) / res - 1.0, -1, d.width + 1);
+  const int x1 = cell((centre.x() + r - d.origin.x()) / res + 2.0, -1, d.width + 1);
+  const int y0 = cell((centre.y() - r - d.origin.y()) / res - 1.0, -1, d.height + 1);
+  const int y1 = cell((centre.y() + r - d.origin.y()) / res + 2.0, -1, d.height + 1);
   if (x1 <= x0 + 1 || y1 <= y0 + 1) return f;  // the window misses the grid: w, h stay 0 (every sample 0)
   f.x0 = x0;
   f.y0 = y0;
@@ -206,13 +213,15 @@ ScanMatchResult scan_match(ClearanceView distance, std::span<const Eigen::Vector
   check_view(distance, "scan_match");
   if (!(std::isfinite(prior.x) && std::isfinite(prior.y) && std::isfinite(prior.theta)))
     fail(ErrorCode::kInvalidArgument, "scan_match: the prior pose is not finite");
+  if (!within_map_limits({prior.x, prior.y}))
+    fail(ErrorCode::kOutOfRange, "scan_match: the prior pose is beyond the map frame's +-" + std::to_string(kMaxCoordinateM) + " m");
   ScanMatchResult out;
   out.pose = prior;
   std::vector<Eigen::Vector2f> pts;
   pts.reserve(points_robot.size());
   float radius = 0.0f;
   for (const Eigen::Vector2f& p : points_robot)
-    if (p.allFinite()) {
+    if (within_map_limits(p)) {  // finite and within the map frame's reach: a farther point is no scan
       pts.push_back(p);
       radius = std::max(radius, p.norm());
     }

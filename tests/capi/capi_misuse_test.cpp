@@ -458,6 +458,27 @@ TEST(CapiDevice, NoDeviceCallbackAndThreadLocalSlot) {
   EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_ARGUMENT);
 }
 
+// A callback whose own duet call fails is not called again for that error (found by
+// fuzz_capi: it recursed until the stack overflowed); the inner error is still recorded.
+TEST(CapiDevice, ACallbackIsNotReenteredByItsOwnFailingCall) {
+  (void)duet_device_get_error(nullptr);
+  static std::atomic<int> calls;
+  calls = 0;
+  duet_device_set_error_callback(
+      nullptr, [](void*, duet_error, const char*) {
+        ++calls;
+        (void)duet_device_get_thread_count(nullptr);  // fails: NULL device
+      },
+      nullptr);
+  EXPECT_EQ(duet_device_get_thread_count(nullptr), 0);
+  EXPECT_EQ(calls.load(), 1);
+  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(duet_device_get_thread_count(nullptr), 0);  // the guard was released
+  EXPECT_EQ(calls.load(), 2);
+  duet_device_set_error_callback(nullptr, nullptr, nullptr);
+  (void)duet_device_get_error(nullptr);
+}
+
 TEST(CapiDevice, VersionAndErrorStrings) {
   EXPECT_EQ(duet_get_version(), DUET_VERSION);
   EXPECT_STREQ(duet_get_version_string(), DUET_VERSION_STRING);

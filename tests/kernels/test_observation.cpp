@@ -488,6 +488,7 @@ TEST(SensorSectors, InvalidFieldsThrow) {
   bad([](SensorSector& s) { s.max_range_m = 100.5f; }, "max_range_m");
   bad([](SensorSector& s) { s.rays = 0; }, "rays");
   bad([](SensorSector& s) { s.x_m = kNaN; }, "x_m");
+  bad([](SensorSector& s) { s.y_m = 101.0f; }, "y_m");  // a mount offset is within the range limit
   EXPECT_DUET_ERROR(validate(std::span<const SensorSector>()), ErrorCode::kInvalidArgument, "sensors");
   SensorSector zero_len;
   zero_len.min_range_m = zero_len.max_range_m = 1.0f;
@@ -861,7 +862,17 @@ TEST(ObservationModel, InvalidSettingsAndSizesThrow) {
     EXPECT_DUET_ERROR(m.cast(o, d, 0.0f, 1.0f, h), ErrorCode::kInvalidArgument, "unit");
     d[2] = Eigen::Vector2f(1, 0);
     o[3] = Eigen::Vector2f(kNaN, 0);
-    EXPECT_DUET_ERROR(m.cast(o, d, 0.0f, 1.0f, h), ErrorCode::kInvalidArgument, "finite");
+    EXPECT_DUET_ERROR(m.cast(o, d, 0.0f, 1.0f, h), ErrorCode::kInvalidArgument, "origin");
+    // Finite but beyond the map frame (Embree refuses rays with origins beyond ~1.8e18 by an
+    // assertion in Debian's build: found by fuzz_capi); poses and sensor mounts alike.
+    o[3] = Eigen::Vector2f(3e38f, 0);
+    EXPECT_DUET_ERROR(m.cast(o, d, 0.0f, 1.0f, h), ErrorCode::kInvalidArgument, "origin");
+    const std::vector<Pose2> far_pose{Pose2{0.0f, -3e38f, 0.0f}};
+    EXPECT_DUET_ERROR(m.observe(far_pose, sensors, out60), ErrorCode::kOutOfRange, "pose 0");
+    auto far_mount = sensors;
+    far_mount[0].x_m = 3e38f;
+    EXPECT_DUET_ERROR(m.observe(poses, far_mount, out), ErrorCode::kInvalidArgument, "x_m");
+    EXPECT_NO_THROW(m.observe(std::vector<Pose2>{Pose2{9999.0f, -9999.0f, 1e30f}}, sensors, out60));
   }
 }
 

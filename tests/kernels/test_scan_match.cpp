@@ -251,6 +251,34 @@ TEST(ScanMatch, EmptyTinyNanAndOffGridInputKeepThePrior) {
   EXPECT_EQ(z.status, ScanMatchStatus::kNotConfident);
 }
 
+// Huge finite points or a far prior (found by fuzz_capi: a point at 3e38 m made the field's
+// window -inf cells wide, cast to int - undefined behaviour): such points are skipped, a prior
+// beyond the map frame's limit is an error, a view far from the prior is just missed.
+TEST(ScanMatch, HugePointsAndFarPriorsAreSafe) {
+  const auto walls = room_walls();
+  const Map m = map_of(walls);
+  const Pose2 prior{3.0f, 2.0f, 0.3f};
+  auto pts = scan_from(walls, prior, 5.0f, 0.0f, 1);
+  const ScanMatchResult clean = scan_match(m.field.clearance(), pts, prior);
+  for (const float big : {3e38f, -3e38f, 1e5f}) pts.emplace_back(big, 1.0f);
+  const ScanMatchResult with_huge = scan_match(m.field.clearance(), pts, prior);
+  EXPECT_EQ(with_huge.status, clean.status);
+  EXPECT_EQ(with_huge.pose.x, clean.pose.x);
+  EXPECT_EQ(with_huge.pose.theta, clean.pose.theta);
+  std::vector<Eigen::Vector2f> only_huge(200, Eigen::Vector2f(3e38f, -3e38f));
+  EXPECT_EQ(scan_match(m.field.clearance(), only_huge, prior).status, ScanMatchStatus::kTooFewPoints);
+  try {
+    (void)scan_match(m.field.clearance(), pts, Pose2{2e4f, 0.0f, 0.0f});
+    ADD_FAILURE() << "a prior 20 km away was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kOutOfRange);
+  }
+  // A prior near the limit with the grid far away: nothing to match, no overflow.
+  const ScanMatchResult far = scan_match(m.field.clearance(), scan_from(walls, prior, 5.0f, 0.0f, 1), Pose2{9999.0f, -9999.0f, 0.0f});
+  EXPECT_EQ(far.status, ScanMatchStatus::kNotConfident);
+  EXPECT_EQ(far.pose.x, 9999.0f);
+}
+
 TEST(ScanMatch, InvalidInputThrows) {
   const auto walls = room_walls();
   const Map m = map_of(walls);

@@ -10,6 +10,7 @@
 
 #include "runtime_test_util.hpp"
 
+#include <cmath>
 #include <fstream>
 #include <functional>
 #include <string>
@@ -50,6 +51,35 @@ TEST(SettingsTree, BuiltinProfilesRoundTripThroughToYaml) {
     const YAML::Node root = YAML::Load(y);
     for (const char* section : {"chassis", "sensors", "mapping", "exploration", "control", "localization", "runtime"})
       EXPECT_TRUE(root[section]) << section;
+  }
+}
+
+// A profile that leaves the mapping section out takes the kernels' defaults, one of which is
+// +inf (grid_update.clear_max_height_m: every ray clears). Found by fuzz_profile: to_yaml
+// wrote "inf", which the reader refused as not finite, so `duet profile` printed a profile
+// duet could not read. It is written and read as ".inf" now; other keys stay finite.
+TEST(SettingsTree, DefaultsWithAnInfiniteLimitRoundTrip) {
+  const std::string text =
+      "name: tiny\nchassis: {type: differential, radius_m: 0.2, wheel_base_m: 0.3, wheel_diameter_m: 0.07,"
+      " max_linear_speed_mps: 0.5, max_angular_speed_dps: 90, odometry_rate_hz: 50}\n"
+      "sensors:\n  - name: cam\n    intrinsics: {width: 64, height: 48, fov_h_deg: 57, fov_v_deg: 43}\n"
+      "    extrinsics: {xyz_m: [0.0, 0.0, 0.3], zyx_euler_deg: [0.0, 0.0, 0.0]}\n";
+  const duet::Profile p = duet::parse_profile(text, "tiny.yaml");
+  EXPECT_TRUE(std::isinf(p.mapping.grid_update.clear_max_height_m));
+  const std::string y = duet::to_yaml(p);
+  EXPECT_NE(y.find("clear_max_height_m: .inf"), std::string::npos) << y;
+  const duet::Profile q = duet::parse_profile(y, "written.yaml");
+  EXPECT_TRUE(std::isinf(q.mapping.grid_update.clear_max_height_m));
+  EXPECT_EQ(duet::to_yaml(q), y);
+  const std::vector<duet::ProfileOverlay> finite{duet::set_overlay("mapping.grid_update.clear_max_height_m=0.6")};
+  EXPECT_EQ(duet::parse_profile(y, "written.yaml", finite).mapping.grid_update.clear_max_height_m, 0.6f);
+  // Only that limit may be infinite: another float key refuses .inf, naming the key.
+  try {
+    const std::vector<duet::ProfileOverlay> bad{duet::set_overlay("mapping.grid_update.max_ray_length_m=.inf")};
+    (void)duet::parse_profile(y, "written.yaml", bad);
+    ADD_FAILURE() << "max_ray_length_m = .inf was accepted";
+  } catch (const duet::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("max_ray_length_m"), std::string::npos) << e.what();
   }
 }
 

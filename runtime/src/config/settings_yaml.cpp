@@ -8,6 +8,7 @@
 #include "config/settings_fields.hpp"
 
 #include <charconv>
+#include <cmath>
 #include <functional>
 #include <limits>
 #include <regex>
@@ -30,6 +31,7 @@ struct KeyCollector {
   void choice(const char* key, E&, Names<E>) {
     keys.emplace_back(key);
   }
+  void up_to_inf(const char* key, float&) { keys.emplace_back(key); }
   template <class F>
   void section(const char* key, F&&) {
     keys.emplace_back(key);
@@ -69,6 +71,21 @@ class FieldReader {
       static_assert(std::is_same_v<T, Eigen::Vector3f>, "no reader for this field type");
       field = r_.vec3(n, path, "[x, y, z]");
     }
+  }
+  /// A number or +infinity (YAML ".inf", "inf"): a limit that may be "none".
+  void up_to_inf(const char* key, float& field) {
+    const YAML::Node n = node_[key];
+    if (!n) return;
+    if (n.IsScalar()) {
+      std::string_view s = n.Scalar();
+      if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+      if (s == ".inf" || s == ".Inf" || s == ".INF" || s == "inf") {
+        r_.record(join_path(path_, key), n);
+        field = std::numeric_limits<float>::infinity();
+        return;
+      }
+    }
+    field = r_.real(n, join_path(path_, key));
   }
   template <class E>
   void choice(const char* key, E& field, Names<E> names) {
@@ -212,6 +229,14 @@ class FieldWriter {
   void operator()(const char* key, const T& v) {
     out_ << YAML::Key << key << YAML::Value;
     emit(v);
+  }
+  void up_to_inf(const char* key, float v) {
+    out_ << YAML::Key << key << YAML::Value;
+    if (std::isinf(v) && v > 0.0f) {
+      out_ << ".inf";
+    } else {
+      emit(v);
+    }
   }
   template <class E>
   void choice(const char* key, const E& v, detail::Names<E> names) {

@@ -57,7 +57,7 @@ inline constexpr float kMaxSensorRangeM = 100.0f;
 /// One sensor's horizontal fan, in the robot frame (paper §3.1: a sector of radius max range and
 /// centre angle = the horizontal field of view; Eq. 6 for the extrinsics).
 struct SensorSector {
-  float x_m = 0.0f, y_m = 0.0f;        ///< sensor origin in the robot frame [m]
+  float x_m = 0.0f, y_m = 0.0f;        ///< sensor origin in the robot frame [m], within +-kMaxSensorRangeM
   float yaw_rad = 0.0f;                ///< optical axis yaw in the robot frame [rad] (Eq. 6)
   float fov_rad = 0.99483767f;         ///< horizontal field of view, 57 deg [rad], in (0, 2 pi]
   float min_range_m = 0.5f;            ///< cells nearer than this are not observed [m], >= 0
@@ -277,7 +277,7 @@ class ObservationModel {
   [[nodiscard]] int tiles_y() const;
 
   /// First occupied cell along each ray origin + t*dir, t in [t0, t1] (0 <= t0 <= t1, finite;
-  /// dirs unit within 1e-3, origins finite; out.size() == origins.size() == dirs.size(): else
+  /// dirs unit within 1e-3, origins within kMaxCoordinateM; out.size() == origins.size() == dirs.size(): else
   /// duet::Error). A ray starting inside an occupied cell hits at t0. Cells outside the grid
   /// never stop a ray. Embree: packets of 8 (rtcIntersect8); TBB-parallel over packets; the
   /// result does not depend on the thread count.
@@ -289,7 +289,8 @@ class ObservationModel {
   /// the grid = unknown = 1 bit each). A known obstacle in a cell the ray leaves at or before
   /// min_range_m blocks the ray: the sensor measures nothing (entropy 0, cells 0, hit, range_m =
   /// the entry distance of that cell), as a Kinect returns no depth nearer than 0.5 m.
-  /// Validates the sensors, out.size() and that poses are finite. TBB-parallel over poses x
+  /// Validates the sensors, out.size() and that poses are finite (kInvalidArgument) and within
+  /// kMaxCoordinateM of the origin (kOutOfRange; grid.hpp). TBB-parallel over poses x
   /// sensors; independent of the thread count.
   void observe(std::span<const Pose2> poses, std::span<const SensorSector> sensors,
                std::span<RayObservation> out) const;

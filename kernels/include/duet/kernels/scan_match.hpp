@@ -76,8 +76,10 @@ void occupied_distance(const GridView& grid, const CellThresholds& thresholds, I
                                      const Pose2& pose, const ScanMatchSettings& settings);
 
 /// Matches `points_robot` (robot frame [m]) against `distance` (distance to the nearest occupied
-/// cell centre: the clearance() of occupied_distance()) around `prior` (map frame). Throws duet::Error(kInvalidArgument) for invalid
-/// settings, a non-finite prior, or a view whose size does not match its span.
+/// cell centre: the clearance() of occupied_distance()) around `prior` (map frame). Points with
+/// a non-finite coordinate or one beyond kMaxCoordinateM (grid.hpp) are skipped. Throws
+/// duet::Error(kInvalidArgument) for invalid settings, a non-finite prior, or a view whose size
+/// does not match its span; kOutOfRange for a prior beyond kMaxCoordinateM.
 [[nodiscard]] ScanMatchResult scan_match(ClearanceView distance, std::span<const Eigen::Vector2f> points_robot,
                                          const Pose2& prior, const ScanMatchSettings& settings = {});
 
