@@ -874,8 +874,9 @@ DUET_API size_t duet_planner_get_ray_count(duet_planner planner);
 /* Sets the planner's map from a caller buffer: `height` rows of `width` float log-odds (NaN =
  * unknown), row 0 at the lowest y, rows `row_stride_bytes` apart (0 = packed = width * 4; else
  * a multiple of 4, >= width * 4; `logodds` 4-byte aligned). width, height > 0 with
- * width * height < 2^30 (else DUET_ERROR_OUT_OF_RANGE); resolution_m finite > 0; origin (world
- * position of cell (0, 0)'s lower-left corner [m]) finite.
+ * width * height < 2^30 (else DUET_ERROR_OUT_OF_RANGE); resolution_m in [0.001, 100] (the map
+ * frame's cells, as duet_grid_new); origin (world position of cell (0, 0)'s lower-left corner
+ * [m]) finite, within +-20 km (else DUET_ERROR_OUT_OF_RANGE).
  * The planner COPIES the cells (the observation model owns its copy; the buffer may be reused
  * or freed when the call returns). With the same geometry (size, resolution, origin) and the
  * same observation settings as the previous successful call the observation model is updated

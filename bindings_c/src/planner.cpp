@@ -241,11 +241,15 @@ DUET_API void duet_planner_set_grid(duet_planner planner, const float* logodds,
       api_fail(DUET_ERROR_OUT_OF_RANGE, "width x height = " + std::to_string(w * h) +
                                             " cells (at most 2^30 - 1 supported)");
     }
-    if (!std::isfinite(resolution_m) || !(resolution_m > 0.0f)) {
-      invalid_argument("resolution_m is " + std::to_string(resolution_m) + " (must be finite and > 0)");
+    if (!(resolution_m >= duet::kMinGridResolutionM && resolution_m <= duet::kMaxGridResolutionM)) {
+      invalid_argument("resolution_m is " + std::to_string(resolution_m) + " (must be in [0.001, 100] m)");
     }
     check_finite(origin_x, "origin_x");
     check_finite(origin_y, "origin_y");
+    if (std::fabs(origin_x) > 2.0f * duet::kMaxCoordinateM || std::fabs(origin_y) > 2.0f * duet::kMaxCoordinateM) {
+      api_fail(DUET_ERROR_OUT_OF_RANGE, "origin (" + std::to_string(origin_x) + ", " + std::to_string(origin_y) +
+                                            ") is beyond the map frame's +-20 km");
+    }
     // One row is one "element" of width * 4 bytes; rows at row_stride_bytes.
     const std::size_t stride = check_buffer(logodds, row_stride_bytes, h, w * sizeof(float), 4, "logodds");
     const auto os = to_cpp(observation_settings, "observation_settings");

@@ -17,11 +17,15 @@ void validate(const GridView& grid, const char* what) {
     fail(ErrorCode::kInvalidArgument, name + ": " + std::to_string(grid.logodds.size()) +
                                           " log-odds values for " + std::to_string(grid.width) + " x " +
                                           std::to_string(grid.height) + " cells");
-  if (!std::isfinite(grid.resolution_m) || !(grid.resolution_m > 0.0f))
-    fail(ErrorCode::kInvalidArgument, name + ": resolution_m must be finite and > 0, got " +
-                                          std::to_string(grid.resolution_m));
-  if (!std::isfinite(grid.origin.x()) || !std::isfinite(grid.origin.y()))
-    fail(ErrorCode::kInvalidArgument, name + ": origin must be finite");
+  // The map frame's limits (grid.hpp): a ray of the longest sensor range walks at most
+  // 2 * kMaxSensorRangeM / kMinGridResolutionM cells (a resolution of 1e-30 overflowed the ray
+  // buffers' size: found by fuzz_capi); the origin leaves room for a grid's growth margin.
+  if (!(grid.resolution_m >= kMinGridResolutionM && grid.resolution_m <= kMaxGridResolutionM))
+    fail(ErrorCode::kInvalidArgument, name + ": resolution_m must be in [" + std::to_string(kMinGridResolutionM) + ", " +
+                                          std::to_string(kMaxGridResolutionM) + "] m, got " + std::to_string(grid.resolution_m));
+  if (!(std::fabs(grid.origin.x()) <= 2.0f * kMaxCoordinateM) || !(std::fabs(grid.origin.y()) <= 2.0f * kMaxCoordinateM))
+    fail(ErrorCode::kOutOfRange, name + ": origin must be finite and within +-" + std::to_string(2.0f * kMaxCoordinateM) +
+                                     " m, got (" + std::to_string(grid.origin.x()) + ", " + std::to_string(grid.origin.y()) + ")");
 }
 
 void validate(const CellThresholds& t) {

@@ -58,6 +58,7 @@ struct ExploreOptions {
   float gyro_noise = 0.0f;
   bool no_loop_closure = false;
   std::string on_done;  // empty: the profile's exploration.on_done
+  std::vector<std::string> faults;  // --fault, added to the profile's
   std::string strategy = "profile";
   std::vector<std::string> configs, sets;
   bool quiet = false;
@@ -175,6 +176,24 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                {"scan_matches", s.scan_matches},
                {"scan_match_rejected", s.scan_match_rejected},
                {"scan_match_time_s", s.scan_match_time_s}};
+  j["faults"] = nlohmann::json::array();
+  for (const auto& f : s.faults)
+    j["faults"].push_back({{"spec", f.fault.spec}, {"kind", to_string(f.fault.kind)}, {"injected", f.injected}});
+  const InputStats& in = s.input;
+  j["input"] = {{"odometry_invalid", in.odometry_invalid},
+                {"odometry_out_of_order", in.odometry_out_of_order},
+                {"odometry_jumps_absorbed", in.odometry_jumps},
+                {"frames_invalid", in.frames_invalid},
+                {"frames_out_of_order", in.frames_out_of_order},
+                {"frames_empty", in.frames_empty},
+                {"frames_garbled", in.frames_garbled},
+                {"clock_restarts", in.clock_restarts},
+                {"sensor_silences", in.sensor_silences},
+                {"missing_frames_added", in.placeholders},
+                {"sets_with_missing_frames", s.sets_with_missing},
+                {"blind_hold_periods", s.blind_holds},
+                {"relocalizations", s.relocalizations}};
+  j["occupied_cells_on_obstacles"] = s.occupied_on_obstacles >= 0.0 ? nlohmann::json(s.occupied_on_obstacles) : nlohmann::json(nullptr);
   j["runtime"] = timing_json(s.timing);
   j["runtime"]["execution"] = to_string(s.execution);
   j["runtime"]["paced_by_wall_clock"] = s.realtime;
@@ -266,6 +285,8 @@ nlohmann::json run_log(const sim::SimExplore& run) {
     j["collisions"].push_back({{"t_s", c.t_s},
                                {"true_pose", {c.true_pose.x, c.true_pose.y, c.true_pose.theta}},
                                {"command", {c.command.v, c.command.omega}}});
+  j["runtime_events"] = nlohmann::json::array();  // what the runtime noticed about its inputs and did
+  for (const auto& e : run.runtime().events()) j["runtime_events"].push_back({{"t_s", e.t_s}, {"what", e.what}});
   return j;
 }
 
@@ -335,6 +356,7 @@ sim::ExploreSettings make_settings(const Profile& profile, std::uint64_t seed, d
   es.runtime = profile.runtime;  // the profile's settings tree (runtime, localization, exploration, control)
   es.seed = seed;
   es.max_time_s = max_time;
+  es.faults = profile.faults;
   if (sensor_rate < 0.0) {
     double r = 0.0;
     for (const auto& s : profile.sensors) r = std::max(r, static_cast<double>(s.rate_hz));
@@ -360,6 +382,8 @@ int run_explore(const ExploreOptions& o) {
   if (o.execution == "background" || (o.execution == "auto" && o.realtime)) es.runtime.execution = Execution::kBackground;
   else if (o.execution == "lockstep") es.runtime.execution = Execution::kLockstep;
   es.use_true_pose = o.true_pose;
+  es.faults.insert(es.faults.end(), o.faults.begin(), o.faults.end());
+  (void)parse_faults(es.faults, profile.sensors.size());  // a bad --fault is an error before the run
   if (o.on_done == "return_home") es.runtime.explorer.on_done = OnDone::kReturnHome;
   else if (o.on_done == "stay") es.runtime.explorer.on_done = OnDone::kStay;
   if (o.raw_odometry) es.runtime.pose_correction.enabled = false;
@@ -533,6 +557,10 @@ void add_explore_command(CLI::App& app, int& exit_code) {
       ->check(CLI::IsMember({"auto", "lockstep", "background"}))
       ->capture_default_str();
   cmd->add_flag("--true-pose", o->true_pose, "DEBUGGING: map with the true pose instead of the wheel odometry");
+  cmd->add_option("--fault", o->faults,
+                  "inject a fault, KIND[:SENSOR]@START[+DURATION][=AMOUNT] (repeatable; e.g. camera_stop:1@60+10; kinds: camera_stop, "
+                  "depth_zero, depth_noise, color_black, extrinsics, wheel_slip, odom_jump, stamp_disorder, stamp_duplicate, "
+                  "stamp_late, clock_back, kidnap; see runtime/robot/faults.hpp)");
   cmd->add_flag("--raw-odometry", o->raw_odometry, "pose = the raw wheel odometry (no scan-to-map correction)");
   cmd->add_option("--gyro-noise", o->gyro_noise,
                   "simulated gyro's rate-noise density [rad/s/sqrt(Hz)], [0, 0.01] (ChassisSimSettings::gyro_noise_density; 0 = none)")

@@ -1408,6 +1408,14 @@ TEST_F(PlannerTest, BadGridArgumentsLeaveThePlannerUnchanged) {
        DUET_ERROR_INVALID_ARGUMENT, "origin_x"},
       {"NaN origin", [&] { duet_planner_set_grid(planner_, small.data(), 0, 4, 4, 0.1f, 0, kNaN, nullptr, nullptr); },
        DUET_ERROR_INVALID_ARGUMENT, "origin_y"},
+      // The map frame's limits (found by fuzz_capi: a resolution of 1e-30 made Procedure 1's
+      // ray buffers' size overflow).
+      {"tiny resolution", [&] { duet_planner_set_grid(planner_, small.data(), 0, 4, 4, 1e-30f, 0, 0, nullptr, nullptr); },
+       DUET_ERROR_INVALID_ARGUMENT, "resolution_m"},
+      {"huge resolution", [&] { duet_planner_set_grid(planner_, small.data(), 0, 4, 4, 1e3f, 0, 0, nullptr, nullptr); },
+       DUET_ERROR_INVALID_ARGUMENT, "resolution_m"},
+      {"far origin", [&] { duet_planner_set_grid(planner_, small.data(), 0, 4, 4, 0.1f, 0, -3e4f, nullptr, nullptr); },
+       DUET_ERROR_OUT_OF_RANGE, "origin"},
       {"stride < row", [&] { duet_planner_set_grid(planner_, small.data(), 12, 4, 4, 0.1f, 0, 0, nullptr, nullptr); },
        DUET_ERROR_INVALID_ARGUMENT, "logodds stride 12 bytes is smaller"},
       {"stride % 4", [&] { duet_planner_set_grid(planner_, small.data(), 17, 4, 2, 0.1f, 0, 0, nullptr, nullptr); },

@@ -104,6 +104,11 @@ TEST(GridEntropy, EmptyTinyAndErrors) {
   const GridView badres(lo, 4, 3, 0.0f, Eigen::Vector2f::Zero());
   std::vector<float> out12(12);
   EXPECT_DUET_ERROR(grid_entropy(badres, out12), ErrorCode::kInvalidArgument, "resolution");
+  // Every planning kernel's view obeys the map frame's limits (grid.hpp; validate(GridView)).
+  EXPECT_DUET_ERROR(grid_entropy(GridView(lo, 4, 3, 1e-30f, Eigen::Vector2f::Zero()), out12), ErrorCode::kInvalidArgument, "resolution");
+  EXPECT_DUET_ERROR(grid_entropy(GridView(lo, 4, 3, 101.0f, Eigen::Vector2f::Zero()), out12), ErrorCode::kInvalidArgument, "resolution");
+  EXPECT_DUET_ERROR(grid_entropy(GridView(lo, 4, 3, 0.05f, Eigen::Vector2f(3e4f, 0.0f)), out12), ErrorCode::kOutOfRange, "origin");
+  EXPECT_NO_THROW(grid_entropy(GridView(lo, 4, 3, kMinGridResolutionM, Eigen::Vector2f(-1.5e4f, 1.5e4f)), out12));
 }
 
 }  // namespace

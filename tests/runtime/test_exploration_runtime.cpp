@@ -127,7 +127,7 @@ TEST(ExplorationRuntime, NoRecentObstaclesWhenTheWindowIsZero) {
   EXPECT_EQ(r.rt.explorer().stats().recent_obstacle_cells, 0u);
 }
 
-TEST(ExplorationRuntime, ASilentSensorIsCountedNotFatal) {
+TEST(ExplorationRuntime, ASilentSensorIsMappedAroundAndCounted) {
   const duet::Profile profile = duet::builtin_profile("dual");
   ScriptedChassis chassis;
   ScriptedSensor front, right;
@@ -142,20 +142,21 @@ TEST(ExplorationRuntime, ASilentSensorIsCountedNotFatal) {
     rt.tick(t);
   }
   const auto& st = rt.stats();
-  EXPECT_EQ(st.sets_integrated, 0u);
-  EXPECT_GT(st.frame_drops, 50u);  // queue overflow of the front stream, counted
-  EXPECT_EQ(rt.mapper().stats().observations, 0u);
-  // No map: the explorer is idle and commands a stop.
-  EXPECT_EQ(rt.explorer().state(), duet::ExplorerState::kIdle);
-  for (const auto& c : chassis.commands) {
-    EXPECT_EQ(c.v, 0.0f);
-    EXPECT_EQ(c.omega, 0.0f);
-  }
-  // Non-finite and out-of-order stamps are dropped and counted, never integrated.
+  // After 2.5 frame periods without a frame from it, the right sensor is silent: the runtime
+  // adds a missing frame beside each front frame and maps with the front sensor alone (it
+  // stalled the synchronizer for good before the input guard).
+  EXPECT_EQ(st.input.sensor_silences, 1u);
+  EXPECT_GT(st.input.placeholders, 90u);
+  EXPECT_GT(st.sets_integrated, 3u);
+  EXPECT_EQ(st.sets_with_missing, st.sets_integrated + st.sets_not_integrated);
+  EXPECT_GT(rt.mapper().stats().observations, 0u);
+  EXPECT_FALSE(rt.events().empty());
+  // Non-finite and out-of-order stamps are dropped and counted by the input guard, never integrated.
   chassis.pending.push_back({NAN, {}, {}});
   chassis.pending.push_back({1.0, {}, {}});
   rt.tick(5.1);
-  EXPECT_GE(rt.synchronizer().stats(2).dropped_total(), 2u);
+  EXPECT_EQ(rt.stats().input.odometry_invalid, 1u);
+  EXPECT_EQ(rt.stats().input.odometry_out_of_order, 1u);
 }
 
 TEST(ExplorationRuntime, WiringErrors) {

@@ -221,6 +221,13 @@ void SimChassis::step() {
   }
 }
 
+bool SimChassis::displace(const Eigen::Vector2f& d) {
+  const Pose2 moved{true_pose_.x + d.x(), true_pose_.y + d.y(), true_pose_.theta};
+  if (!d.allFinite() || collides_at(moved, 0.0f)) return false;
+  true_pose_ = moved;
+  return true;
+}
+
 Pose2 SimChassis::true_pose() const noexcept {
   const double rem = now_s_ - static_cast<double>(steps_) * h_;
   if (!(rem > 0.0)) return true_pose_;

@@ -75,7 +75,11 @@ SimExplore::SimExplore(World world, Profile profile, ExploreSettings settings)
       profile_(seeded(std::move(profile), settings.seed)),
       settings_((validate(settings), settings)),
       robot_((validate(profile_, profile_.name), world_), profile_, robot_settings(settings_)) {
-  runtime_ = std::make_unique<ExplorationRuntime>(profile_, robot_.chassis(), robot_.sensors(), runtime_settings(settings_));
+  if (!settings_.faults.empty()) {
+    injector_ = std::make_unique<FaultInjector>(robot_, parse_faults(settings_.faults, profile_.sensors.size()), mix(settings_.seed ^ 0xFA017ull));
+    fault_started_.assign(injector_->faults().size(), false);
+  }
+  runtime_ = std::make_unique<ExplorationRuntime>(profile_, source().chassis(), source().sensors(), runtime_settings(settings_));
   dt_ = 1.0 / settings_.runtime.control_rate_hz;
   truth_ = rasterize(*world_, settings_.coverage_resolution_m, 0.0f, 0.6f);
   float range = 0.0f;
@@ -109,6 +113,32 @@ CurvePoint SimExplore::measure() const {
   return p;
 }
 
+double SimExplore::occupied_on_obstacles() const {
+  // A grid cell is on an obstacle when the truth raster has an occupied cell within 0.1 m of its
+  // centre (a wall's cells straddle its face; one cell of slack either way).
+  const OccupancyGrid& g = runtime_->map_grid();
+  const CellThresholds& th = profile_.exploration.cells;
+  const int r = std::max(1, static_cast<int>(std::ceil(0.1f / truth_.resolution_m)));
+  std::size_t occupied = 0, on = 0;
+  for (int y = 0; y < g.height(); ++y)
+    for (int x = 0; x < g.width(); ++x) {
+      if (classify(g.at(x, y), th) != CellState::kOccupied) continue;
+      ++occupied;
+      const Eigen::Vector2f c = g.cell_center(x, y);
+      const int tx = static_cast<int>(std::floor((c.x() - truth_.origin.x()) / truth_.resolution_m));
+      const int ty = static_cast<int>(std::floor((c.y() - truth_.origin.y()) / truth_.resolution_m));
+      bool hit = false;
+      for (int dy = -r; dy <= r && !hit; ++dy)
+        for (int dx = -r; dx <= r && !hit; ++dx) {
+          const int qx = tx + dx, qy = ty + dy;
+          // Outside the truth raster is outside the floor: solid.
+          hit = qx < 0 || qy < 0 || qx >= truth_.width || qy >= truth_.height || truth_.at(qx, qy) != 0;
+        }
+      on += hit ? 1 : 0;
+    }
+  return occupied ? static_cast<double>(on) / static_cast<double>(occupied) : -1.0;
+}
+
 bool SimExplore::step() {
   if (reason_ != StopReason::kRunning) return false;
   // 1-2. The chassis moves one control period (physics inside; odometry at 50 Hz); the sensors
@@ -116,7 +146,8 @@ bool SimExplore::step() {
   const double t_end = t_ + dt_;
   const SimChassis& chassis = robot_.sim_chassis();
   const std::size_t collisions_before = chassis.collisions();
-  robot_.advance(t_end);
+  if (injector_) apply_sim_faults();
+  source().advance(t_end);
   t_ = t_end;
   if (chassis.collisions() > collisions_before) collision_log_.push_back({t_, chassis.true_pose(), runtime_->last_command()});
   // Paced by the wall clock, the robot's tick comes at its time: the world of the period (its
@@ -148,6 +179,31 @@ bool SimExplore::step() {
   if (reason_ != StopReason::kRunning) finish();
   wall_elapsed_ = wall_.now_s();
   return reason_ == StopReason::kRunning;
+}
+
+void SimExplore::apply_sim_faults() {
+  const auto& faults = injector_->faults();
+  for (std::size_t i = 0; i < faults.size(); ++i) {
+    const Fault& f = faults[i];
+    if (f.kind == FaultKind::kExtrinsics) {
+      const bool on = f.active(t_);
+      robot_.sim_sensor(static_cast<std::size_t>(f.sensor - 1))
+          .set_mount_error(on ? static_cast<float>(f.amount * std::numbers::pi / 180.0) : 0.0f);
+      if (on && !fault_started_[i]) injector_->count(i);
+      fault_started_[i] = on;
+    } else if (f.kind == FaultKind::kKidnap && !fault_started_[i] && t_ >= f.start_s) {
+      // Pushed sideways (left, else right; else as far as there is room).
+      const Pose2 p = robot_.sim_chassis().true_pose();
+      const Eigen::Vector2f left(-std::sin(p.theta), std::cos(p.theta));
+      const float a = static_cast<float>(f.amount);
+      for (const float k : {1.0f, -1.0f, 0.5f, -0.5f, 0.25f, -0.25f})
+        if (robot_.sim_chassis().displace(left * (a * k))) {
+          injector_->count(i);
+          break;
+        }
+      fault_started_[i] = true;
+    }
+  }
 }
 
 void SimExplore::finish() {
@@ -221,6 +277,12 @@ ExploreSummary SimExplore::summary() const {
     s.loop_closure = true;
     s.loops = lc->stats();
   }
+  if (injector_) s.faults = injector_->counts();
+  s.input = rs.input;
+  s.sets_with_missing = rs.sets_with_missing;
+  s.blind_holds = rs.blind_holds;
+  s.relocalizations = rs.relocalizations;
+  s.occupied_on_obstacles = occupied_on_obstacles();
   return s;
 }
 

@@ -38,8 +38,9 @@ bool SimRgbdSensor::capture(double now_s) {
     f.image = std::move(spare_.back());
     spare_.pop_back();
   }
-  renderer_.render(sensor_, to_isometry(chassis_.true_pose()) * sensor_.T_robot_optical(), mix(seed_ + 0x100000001B3ull * rendered_),
-                   f.image);
+  Eigen::Isometry3f mount = sensor_.T_robot_optical();
+  if (mount_error_rad_ != 0.0f) mount.linear() = Eigen::AngleAxisf(mount_error_rad_, Eigen::Vector3f::UnitZ()) * mount.linear();
+  renderer_.render(sensor_, to_isometry(chassis_.true_pose()) * mount, mix(seed_ + 0x100000001B3ull * rendered_), f.image);
   ++rendered_;
   out_.push_back(std::move(f));
   while (next_t_ <= now_s + 1e-9) next_t_ += period_s_;

@@ -8,6 +8,7 @@
 #include <duet/kernels/error.hpp>
 #include <duet/runtime/config/profile.hpp>
 #include <duet/runtime/io/input_limits.hpp>
+#include <duet/runtime/robot/faults.hpp>
 
 #include "io/file_util.hpp"
 
@@ -156,7 +157,7 @@ ExplorationProfile read_exploration(Reader& r, const YAML::Node& n, const Chassi
 Profile parse_root(Reader& r, const YAML::Node& root, const std::string& source) {
   if (!root || root.IsNull())
     fail(ErrorCode::kParse, source + ": the document is empty; expected a mapping with keys {name, chassis, sensors}");
-  MapReader m(r, root, "", {"name", "description", "chassis", "sensors", "mapping", "exploration", "control", "localization", "runtime"});
+  MapReader m(r, root, "", {"name", "description", "chassis", "sensors", "mapping", "exploration", "control", "localization", "runtime", "faults"});
   Profile p;
   m.need_string("name", p.name);
   m.opt_string("description", p.description);
@@ -177,6 +178,19 @@ Profile parse_root(Reader& r, const YAML::Node& root, const std::string& source)
     p.exploration = read_exploration(r, YAML::Node(YAML::NodeType::Map), p.chassis);
   }
   p.runtime = detail::read_runtime_settings(r, root, p.runtime);
+  if (const YAML::Node faults = m.get("faults")) {
+    r.record("faults", faults);
+    if (!faults.IsSequence()) r.parse_error(faults, "faults", "expected a sequence of fault specs, got " + node_kind(faults));
+    for (std::size_t i = 0; i < faults.size(); ++i) {
+      const std::string path = "faults[" + std::to_string(i) + "]";
+      p.faults.push_back(r.string(faults[i], path));
+      try {
+        (void)parse_fault(p.faults.back(), p.sensors.size());
+      } catch (const Error& e) {
+        r.invalid(faults[i], path, e.what());
+      }
+    }
+  }
   return p;
 }
 

@@ -37,6 +37,17 @@ void fields(V& v, ApproximateTimeSettings& s) {
 }
 
 template <class V>
+void fields(V& v, InputGuardSettings& s) {
+  v("clock_step_messages", s.clock_step_messages);
+  v("jump_speed_factor", s.jump_speed_factor);
+  v("jump_margin_m", s.jump_margin_m);
+  v("jump_margin_rad", s.jump_margin_rad);
+  v("garbled_step_m", s.garbled_step_m);
+  v("garbled_fraction", s.garbled_fraction);
+  v("sensor_timeout_periods", s.sensor_timeout_periods);
+}
+
+template <class V>
 void fields(V& v, ScanMatchSettings& s) {
   v("linear_window_m", s.linear_window_m);
   v("angular_window_deg", s.angular_window_deg);
@@ -61,6 +72,12 @@ void fields(V& v, PoseCorrectionSettings& s) {
   v("max_height_m", s.max_height_m);
   v("pixel_step", s.pixel_step);
   v("max_points", s.max_points);
+  v("relocalize_after", s.relocalize_after);
+  v("relocalize_window_m", s.relocalize_window_m);
+  v("relocalize_window_deg", s.relocalize_window_deg);
+  v("relocalize_step_m", s.relocalize_step_m);
+  v("relocalize_step_deg", s.relocalize_step_deg);
+  v("relocalize_min_gain", s.relocalize_min_gain);
   v.section("match", [&](auto& w) { fields(w, s.match); });
 }
 
@@ -143,6 +160,7 @@ void runtime_fields(V& v, RuntimeSettings& s) {
   v.choice("execution", s.execution, kExecutionNames);
   v("background_threads", s.background_threads);
   v.section("synchronizer", [&](auto& w) { fields(w, s.sync); });
+  v.section("input", [&](auto& w) { fields(w, s.input); });
 }
 
 /// The `localization` section.

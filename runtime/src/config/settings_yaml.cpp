@@ -300,6 +300,11 @@ std::string to_yaml(const Profile& profile) {
   w.section("control", [&](FieldWriter& v) { detail::control_fields(v, p.runtime.explorer); });
   w.section("localization", [&](FieldWriter& v) { detail::localization_fields(v, p.runtime); });
   w.section("runtime", [&](FieldWriter& v) { detail::runtime_fields(v, p.runtime); });
+  if (!p.faults.empty()) {
+    out << YAML::Key << "faults" << YAML::Value << YAML::BeginSeq;
+    for (const std::string& f : p.faults) out << YAML::DoubleQuoted << f;
+    out << YAML::EndSeq;
+  }
   out << YAML::EndMap;
   if (!out.good()) fail(ErrorCode::kInternal, std::string("to_yaml: ") + out.GetLastError());
   return std::string(out.c_str()) + "\n";

@@ -6,6 +6,7 @@
 #include "mapping/cell_key.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <numbers>
@@ -27,6 +28,13 @@ void validate(const PoseCorrectionSettings& s) {
     bad("rate_gain must be in [0, 1], got " + std::to_string(s.rate_gain));
   if (!(std::isfinite(s.rate_gain_initial) && s.rate_gain_initial >= s.rate_gain && s.rate_gain_initial <= 1.0f && s.rate_gain_initial > 0.0f))
     bad("rate_gain_initial must be in [rate_gain, 1] and > 0, got " + std::to_string(s.rate_gain_initial));
+  if (s.relocalize_after < 0 || s.relocalize_after > 5) bad("relocalize_after must be in [0, 5], got " + std::to_string(s.relocalize_after));
+  auto in = [](float v, float lo, float hi) { return std::isfinite(v) && v > lo && v <= hi; };
+  if (!in(s.relocalize_window_m, 0.0f, 5.0f)) bad("relocalize_window_m must be in (0, 5] m, got " + std::to_string(s.relocalize_window_m));
+  if (!in(s.relocalize_window_deg, 0.0f, 45.0f)) bad("relocalize_window_deg must be in (0, 45] deg, got " + std::to_string(s.relocalize_window_deg));
+  if (!in(s.relocalize_step_m, 0.0f, 1.0f)) bad("relocalize_step_m must be in (0, 1] m, got " + std::to_string(s.relocalize_step_m));
+  if (!in(s.relocalize_step_deg, 0.0f, 10.0f)) bad("relocalize_step_deg must be in (0, 10] deg, got " + std::to_string(s.relocalize_step_deg));
+  if (!in(s.relocalize_min_gain, 0.0f, 1.0f)) bad("relocalize_min_gain must be in (0, 1], got " + std::to_string(s.relocalize_min_gain));
 }
 
 PoseCorrector::PoseCorrector(const Profile& profile, const PoseCorrectionSettings& settings) : profile_(profile), settings_(settings) {
@@ -118,9 +126,44 @@ Pose2 PoseCorrector::update(const CameraPoints& points, std::span<const SensorFr
     pending_grid_ = grid;
     pending_t_ = t;
   }
+  bool relocalized = false;
   if (have_reference_ && scan_points_.size() >= pc.match.min_points) {
     const ScanMatchResult r = scan_match(distance_.clearance(), scan_points_, prior, pc.match);
-    if (r.status == ScanMatchStatus::kMatched) {
+    // A match that fails, or hits the window's edge, again and again: the pose is off by more
+    // than the window (pushed, slipped) - look wider.
+    const bool edge = r.status == ScanMatchStatus::kMatched &&
+                      std::hypot(r.pose.x - prior.x, r.pose.y - prior.y) > 0.8f * pc.match.linear_window_m;
+    // The last 8 updates, one bit each: rejected or at the window's edge.
+    suspect_ = ((suspect_ << 1) | (r.status == ScanMatchStatus::kMatched && !edge ? 0u : 1u)) & 0xFFu;
+    // The prediction explains almost none of the scan while the matcher found nothing near it:
+    // look wider at once, before this scan is integrated where it does not belong.
+    const bool lost = r.status != ScanMatchStatus::kMatched && r.prior_score < 0.5f * pc.match.min_score;
+    const int recent = std::popcount(suspect_ & 0x1Fu);  // of the last 5
+    // Only against the current grid: an aged reference lacks what the robot has just seen, and
+    // a wide window then finds false fits of the scan's few known parts.
+    if (pc.relocalize_after > 0 && pc.reference_age_s <= 0.0 && (recent >= pc.relocalize_after || lost)) {
+      suspect_ = 0;
+      ScanMatchSettings wide = pc.match;
+      wide.linear_window_m = pc.relocalize_window_m;
+      wide.angular_window_deg = pc.relocalize_window_deg;
+      wide.linear_step_m = pc.relocalize_step_m;
+      wide.angular_step_deg = pc.relocalize_step_deg;
+      wide.prior_sigma_m = 100.0f * pc.relocalize_window_m;  // no pull toward the prediction
+      wide.prior_sigma_deg = 100.0f * pc.relocalize_window_deg;
+      const ScanMatchResult w = scan_match(distance_.clearance(), scan_points_, prior, wide);
+      // Clearly better than the prediction and a good fit in itself (a pushed robot's scan
+      // scores ~0.96 at the found pose against ~0.01 at the prediction).
+      if (w.status == ScanMatchStatus::kMatched && w.score >= w.prior_score + pc.relocalize_min_gain &&
+          w.score >= pc.match.min_score + pc.relocalize_min_gain &&
+          std::hypot(w.pose.x - prior.x, w.pose.y - prior.y) > 0.5f * pc.match.linear_window_m) {
+        at = w.pose;
+        relocalized = true;
+        ++relocalizations_;
+        last_relocalization_ = Pose2{w.pose.x - prior.x, w.pose.y - prior.y, std::remainder(w.pose.theta - prior.theta, kTwoPi)};
+        last_relocalization_scores_ = {w.score, w.prior_score};
+      }
+    }
+    if (!relocalized && r.status == ScanMatchStatus::kMatched) {
       const float g = pc.gain;
       const float e_theta = std::remainder(r.pose.theta - prior.theta, kTwoPi);
       at = Pose2{prior.x + g * (r.pose.x - prior.x), prior.y + g * (r.pose.y - prior.y), std::remainder(prior.theta + g * e_theta, kTwoPi)};
@@ -132,7 +175,7 @@ Pose2 PoseCorrector::update(const CameraPoints& points, std::span<const SensorFr
     }
   }
   correction_ = compose(at, inverse(odom));
-  ++(accepted ? matches_ : rejected_);
+  ++(accepted || relocalized ? matches_ : rejected_);
   time_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return at;
 }

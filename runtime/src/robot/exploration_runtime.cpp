@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <string>
 #include <thread>
@@ -46,6 +47,7 @@ void validate(const RuntimeSettings& s) {
     bad("decision_delay_s must be in [0, 60] s, got " + std::to_string(s.decision_delay_s));
   validate(s.explorer);
   validate(s.sync);
+  validate(s.input);
   validate(s.pose_correction);
   validate(s.loop_closure);
 }
@@ -80,6 +82,10 @@ struct ExplorationRuntime::Result {
   std::optional<Pose2> shift;
   std::vector<RgbdImage> images;          ///< to recycle on the control thread
   std::size_t scan_matches = 0, scan_match_rejected = 0, loop_closures = 0;
+  std::size_t relocalizations = 0;
+  Pose2 relocalization;
+  std::pair<float, float> relocalization_scores{0.0f, 0.0f};
+  double now_s = 0.0;
   double scan_match_time_s = 0.0;
   double frame_to_map_s = 0.0;
   double done_wall_s = 0.0;
@@ -138,6 +144,7 @@ ExplorationRuntime::ExplorationRuntime(const Profile& profile, ChassisInterface&
       explorer_(profile, settings.explorer),
       corrector_(profile, settings.pose_correction),
       memory_(settings.explorer),
+      guard_(profile, settings.sensor_rate_hz, settings.input),
       sync_(profile.sensors.size() + 1, sync_settings(profile, settings)) {
   if (sensors_.size() != profile_.sensors.size())
     fail(ErrorCode::kInvalidArgument, "ExplorationRuntime: " + std::to_string(sensors_.size()) + " sensors for a profile with " +
@@ -211,8 +218,8 @@ std::optional<Pose2> ExplorationRuntime::map_update(MapInput& in) {
   const std::size_t n = sensors_.size();
   std::vector<SensorFrame> frames;
   frames.reserve(n);
-  for (std::size_t i = 0; i < n; ++i)
-    frames.push_back(frame_view(in.images[i], profile_.sensors[i], profile_.sensors[i].T_robot_optical()));
+  for (std::size_t i = 0; i < n; ++i)  // a missing frame (a silent or garbled sensor) is left out
+    if (in.images[i].width > 0) frames.push_back(frame_view(in.images[i], profile_.sensors[i], profile_.sensors[i].T_robot_optical()));
   // Each depth image is read once: the matcher and the mapper transform the same points.
   back_project_camera(frames, profile_.mapping.back_projection, camera_points_);
   // The pose at the frames' time: the odometry interpolated to their mean stamp, corrected by
@@ -262,6 +269,14 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
   const OdometryMsg odom = ot->second;
   odometry_.erase(ot);
   const double stamp = set.stamps_s[n];
+  if (map_t_restart_) {  // a new time base: the first set is due
+    next_map_t_ = stamp;
+    map_t_restart_ = false;
+  }
+  bool missing = false, seen = false;
+  for (std::size_t i = 0; i < n; ++i) (in.images[i].width > 0 ? seen : missing) = true;
+  if (seen) last_seen_t_ = now_s;
+  if (missing) ++stats_.sets_with_missing;
   const bool due = stamp + 1e-9 >= next_map_t_;
   if (due && worker_ && map_in_flight_) {
     ++stats_.map_sets_skipped;  // the last update still runs: the next set after it is taken
@@ -283,6 +298,7 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
     if (!pose_override_) pose_ = compose(correction_, odom_pose_);
     stats_.scan_matches = corrector_.matches();
     stats_.scan_match_rejected = corrector_.rejected();
+    note_relocalization(corrector_.relocalizations(), corrector_.last_relocalization(), corrector_.last_relocalization_scores(), now_s);
     stats_.scan_match_time_s = corrector_.time_s();
     ++stats_.sets_integrated;
   } else {
@@ -307,6 +323,10 @@ void ExplorationRuntime::submit_map_update(MapInput&& input) {
     r.scan_matches = corrector_.matches();
     r.scan_match_rejected = corrector_.rejected();
     r.scan_match_time_s = corrector_.time_s();
+    r.relocalizations = corrector_.relocalizations();
+    r.relocalization = corrector_.last_relocalization();
+    r.relocalization_scores = corrector_.last_relocalization_scores();
+    r.now_s = in->now_s;
     r.images = std::move(in->images);
     r.done_wall_s = wall_s();
     r.frame_to_map_s = (in->now_s - in->t_frames) + (r.done_wall_s - submitted);
@@ -376,6 +396,7 @@ void ExplorationRuntime::take_results() {
       stats_.scan_matches = r.scan_matches;
       stats_.scan_match_rejected = r.scan_match_rejected;
       stats_.scan_match_time_s = r.scan_match_time_s;
+      note_relocalization(r.relocalizations, r.relocalization, r.relocalization_scores, r.now_s);
       grid_copy_ = std::move(r.grid);
       frame_to_map_.add(r.frame_to_map_s);
       link_->map_seen();
@@ -401,27 +422,9 @@ void ExplorationRuntime::tick(double now_s) {
   last_tick_wall_ = w0;
   if (worker_) take_results();
   const std::size_t n = sensors_.size();
-  // 1. Odometry (pose at up to the odometry rate) and frames into the synchronizer.
-  for (OdometryMsg& m : chassis_.take_odometry()) {
-    ++stats_.odometry_received;
-    odom_pose_ = m.pose;
-    pose_ = compose(correction_, m.pose);
-    if (odom_history_.empty() || m.stamp_s > odom_history_.back().stamp_s) odom_history_.push_back(m);
-    while (odom_history_.size() > kOdomHistory) odom_history_.pop_front();
-    odom_twist_ = m.twist;
-    const std::uint64_t id = next_id_++;
-    const double stamp = m.stamp_s;
-    odometry_.emplace(id, m);
-    (void)sync_.add(n, stamp, id);  // a refused message comes back in take_drops()
-  }
-  if (pose_override_) pose_ = *pose_override_;
-  for (std::size_t i = 0; i < n; ++i)
-    for (StampedRgbd& f : sensors_[i]->take_frames()) {
-      ++stats_.frames_received;
-      const std::uint64_t id = next_id_++;
-      frames_.emplace(id, std::move(f.image));
-      (void)sync_.add(i, f.stamp_s, id);  // a refused message comes back in take_drops()
-    }
+  // 1. Odometry (pose at up to the odometry rate) and frames into the synchronizer, through the
+  // input guard.
+  take_inputs(now_s);
   // 2. Synchronized sets -> map updates (map rate); drops release their payloads.
   for (const auto& set : sync_.take_sets()) handle_set(set, now_s);
   for (const auto& d : sync_.take_drops()) {
@@ -437,10 +440,91 @@ void ExplorationRuntime::tick(double now_s) {
       odometry_.erase(d.id);
     }
   }
-  // 3. Control on the pose estimate.
+  // 3. Control on the pose estimate - held still while no frame has been mapped for long: the
+  // map the controller steers by is no longer the world (every sensor silent or garbled).
+  if (last_seen_t_ < 0.0) last_seen_t_ = now_s;
+  const double blind_after = std::max(3.0, 5.0 / settings_.sensor_rate_hz);
+  const bool blind = now_s - last_seen_t_ > blind_after;
+  if (blind != blind_) {
+    guard_.note(now_s, blind ? "no frame mapped for " + std::to_string(now_s - last_seen_t_) + " s: holding still until a sensor delivers"
+                             : "a sensor delivers again: moving on");
+    blind_ = blind;
+  }
   last_cmd_ = worker_ ? explorer_.controller().control(pose_, odom_twist_, now_s, *link_) : explorer_.control(pose_, odom_twist_, now_s);
+  if (blind) {
+    last_cmd_ = Twist{0.0f, 0.0f};
+    ++stats_.blind_holds;
+  }
   chassis_.command(last_cmd_);
   command_.add(wall_s() - w0);
+}
+
+void ExplorationRuntime::note_relocalization(std::size_t count, const Pose2& offset, std::pair<float, float> scores, double now_s) {
+  if (count == stats_.relocalizations) return;
+  stats_.relocalizations = count;
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "the scan matched %.3f m / %.1f deg from the odometry's prediction (score %.2f there, %.2f at the prediction), "
+                "beyond the matcher's window: relocalised",
+                std::hypot(offset.x, offset.y), offset.theta * 180.0f / std::numbers::pi_v<float>, scores.first, scores.second);
+  guard_.note(now_s, buf);
+}
+
+void ExplorationRuntime::restart_time() {
+  sync_ = ApproximateTimeCore(profile_.sensors.size() + 1, sync_settings(profile_, settings_));
+  frames_.clear();
+  odometry_.clear();
+  odom_history_.clear();
+  map_t_restart_ = true;
+}
+
+void ExplorationRuntime::take_inputs(double now_s) {
+  const std::size_t n = sensors_.size();
+  for (OdometryMsg& m : chassis_.take_odometry()) {
+    ++stats_.odometry_received;
+    InputGuard::Verdict v = guard_.odometry(m, now_s);
+    if (v == InputGuard::Verdict::kRestart) {
+      restart_time();
+      v = guard_.odometry(m, now_s);
+    }
+    if (v != InputGuard::Verdict::kAccept) continue;
+    odom_pose_ = m.pose;
+    pose_ = compose(correction_, m.pose);
+    if (odom_history_.empty() || m.stamp_s > odom_history_.back().stamp_s) odom_history_.push_back(m);
+    while (odom_history_.size() > kOdomHistory) odom_history_.pop_front();
+    odom_twist_ = m.twist;
+    const std::uint64_t id = next_id_++;
+    const double stamp = m.stamp_s;
+    odometry_.emplace(id, m);
+    (void)sync_.add(n, stamp, id);  // a refused message comes back in take_drops()
+  }
+  if (pose_override_) pose_ = *pose_override_;
+  std::vector<std::pair<std::size_t, double>> accepted;  // (sensor, stamp) of this tick's frames
+  for (std::size_t i = 0; i < n; ++i)
+    for (StampedRgbd& f : sensors_[i]->take_frames()) {
+      ++stats_.frames_received;
+      bool missing = false;
+      InputGuard::Verdict v = guard_.frame(i, f, now_s, missing);
+      if (v == InputGuard::Verdict::kRestart) {
+        restart_time();
+        v = guard_.frame(i, f, now_s, missing);
+      }
+      if (v != InputGuard::Verdict::kAccept || missing) sensors_[i]->recycle(std::move(f.image));
+      if (v != InputGuard::Verdict::kAccept) continue;
+      const std::uint64_t id = next_id_++;
+      frames_.emplace(id, missing ? RgbdImage{} : std::move(f.image));
+      (void)sync_.add(i, f.stamp_s, id);  // a refused message comes back in take_drops()
+      accepted.emplace_back(i, f.stamp_s);
+    }
+  // A silent sensor (nothing this tick, nothing for a while) gets a missing frame beside each
+  // frame of the others, so sets form without it.
+  for (const auto& [i, stamp] : accepted)
+    for (const std::size_t j : guard_.placeholders(i, stamp, now_s)) {
+      const std::uint64_t pid = next_id_++;
+      frames_.emplace(pid, RgbdImage{});
+      (void)sync_.add(j, stamp, pid);
+    }
+  stats_.input = guard_.stats();
 }
 
 }  // namespace duet

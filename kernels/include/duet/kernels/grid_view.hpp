@@ -56,8 +56,9 @@ struct GridView {
   }
 };
 
-/// Throws duet::Error(kInvalidArgument) naming `what` if the view is inconsistent: negative
-/// sizes, logodds.size() != width*height, resolution not finite and > 0, origin not finite.
+/// Throws duet::Error naming `what` if the view is inconsistent (kInvalidArgument): negative
+/// sizes, logodds.size() != width*height, a resolution outside [kMinGridResolutionM,
+/// kMaxGridResolutionM]; or its origin is beyond +-2 kMaxCoordinateM or not finite (kOutOfRange).
 /// An empty grid (0 x 0) is valid.
 void validate(const GridView& grid, const char* what = "grid");
 

@@ -155,6 +155,10 @@ struct Profile {
   /// synchronizer), `localization` (pose_correction, loop_closure), the goal life cycle's keys
   /// in `exploration` and the controller's behaviours in `control` (see to_yaml() for the tree).
   RuntimeSettings runtime;
+  /// Faults to inject when the profile runs in the simulator (optional; YAML `faults`: a list of
+  /// specs "KIND[:SENSOR]@START[+DURATION][=AMOUNT]", runtime/robot/faults.hpp), e.g. to test a
+  /// robot's launch setup against a camera that stops. A real robot ignores them.
+  std::vector<std::string> faults;
 };
 
 /// The observation model's fan of each sensor (paper §3.1): origin (x, y) and yaw from the

@@ -40,6 +40,20 @@ struct PoseCorrectionSettings {
   float max_height_m = 1.20f;   ///< ... up to this height [m] (the segmentation's obstacle band)
   int pixel_step = 4;           ///< every n-th pixel in u and v of each frame, [1, 64]
   std::size_t max_points = 2000;  ///< at most this many points (one per grid cell, then every k-th), >= 1
+  /// Relocalisation (issue 19: a robot pushed, a burst of wheel slip): when this many of the last
+  /// five updates had their match rejected or at the window's edge - or at once when the
+  /// prediction explains almost none of a scan the matcher rejects (score below half of
+  /// min_score) - the scan is matched over a wide window; a pose that explains it clearly better
+  /// than the prediction replaces it at once. [0, 5]; 0 = never. Only with reference_age_s = 0
+  /// (an aged reference lacks what was just seen: a wide window finds false fits in it).
+  int relocalize_after = 3;
+  float relocalize_window_m = 1.0f;     ///< +- this in x and y [m], (0, 5]
+  float relocalize_window_deg = 20.0f;  ///< +- this in heading [deg], (0, 45]
+  float relocalize_step_m = 0.1f;       ///< lattice step [m] (then refined to a quarter), (0, 1]
+  float relocalize_step_deg = 1.0f;     ///< [deg], (0, 10]
+  /// The wide match's mean score must beat the prediction's by this, and match.min_score by
+  /// this (scores in [0, 1]), (0, 1].
+  float relocalize_min_gain = 0.15f;
 };
 void validate(const PoseCorrectionSettings& s);
 

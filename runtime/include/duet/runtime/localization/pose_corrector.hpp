@@ -46,6 +46,12 @@ class PoseCorrector {
   [[nodiscard]] float heading_rate() const noexcept { return heading_rate_; }
   [[nodiscard]] std::size_t matches() const noexcept { return matches_; }
   [[nodiscard]] std::size_t rejected() const noexcept { return rejected_; }
+  /// Wide re-matches that moved the pose (PoseCorrectionSettings::relocalize_after), and the
+  /// last one's offset from the prediction (map frame, [m, rad]).
+  [[nodiscard]] std::size_t relocalizations() const noexcept { return relocalizations_; }
+  [[nodiscard]] const Pose2& last_relocalization() const noexcept { return last_relocalization_; }
+  /// The last relocalisation's mean scan score at the new pose and at the prediction, [0, 1].
+  [[nodiscard]] std::pair<float, float> last_relocalization_scores() const noexcept { return last_relocalization_scores_; }
   [[nodiscard]] double time_s() const noexcept { return time_s_; }  ///< wall time spent [s]
 
  private:
@@ -66,6 +72,10 @@ class PoseCorrector {
   OccupancyGrid pending_grid_;  ///< the grid copied at pending_t_ (the next reference)
   double pending_t_ = -1.0;
   std::size_t matches_ = 0, rejected_ = 0;
+  unsigned suspect_ = 0;  ///< the last 8 updates, a bit each: match failed or sat at the window's edge
+  std::size_t relocalizations_ = 0;
+  Pose2 last_relocalization_;
+  std::pair<float, float> last_relocalization_scores_{0.0f, 0.0f};
   double time_s_ = 0.0;
 };
 

@@ -36,6 +36,7 @@
 #include <duet/runtime/mapping/mapper.hpp>
 #include <duet/runtime/navigation/explorer.hpp>
 #include <duet/runtime/navigation/obstacle_memory.hpp>
+#include <duet/runtime/robot/input_guard.hpp>
 #include <duet/runtime/robot/latency.hpp>
 #include <duet/runtime/robot/robot_io.hpp>
 #include <duet/runtime/robot/synchronizer.hpp>
@@ -68,6 +69,10 @@ struct RuntimeStats {
   double scan_match_time_s = 0.0;        ///< wall time in the correction [s]
   std::size_t loop_closures = 0;         ///< closures that moved the map frame
   std::size_t decisions_requested = 0;   ///< kBackground: decision tasks started
+  InputStats input;                      ///< what the input guard dropped, absorbed or replaced (input_guard.hpp)
+  std::uint64_t sets_with_missing = 0;   ///< sets mapped with a missing frame (silent or garbled sensor)
+  std::uint64_t blind_holds = 0;         ///< control periods held still: no frame mapped for too long
+  std::size_t relocalizations = 0;       ///< wide re-matches that moved the pose (pushed, slipped)
 };
 
 /// Wall-clock timing of the loop (meaningful when the loop is paced by the wall clock).
@@ -119,6 +124,8 @@ class ExplorationRuntime {
   /// The latest map's grid (valid until the next tick()).
   [[nodiscard]] const OccupancyGrid& map_grid() const;
   [[nodiscard]] const RuntimeStats& stats() const noexcept { return stats_; }
+  /// What the runtime noticed about its inputs and did about it, with times (capped at 1000).
+  [[nodiscard]] const std::vector<RuntimeEvent>& events() const noexcept { return guard_.events(); }
   [[nodiscard]] RuntimeTiming timing() const;
   [[nodiscard]] const ApproximateTimeCore& synchronizer() const noexcept { return sync_; }
   [[nodiscard]] const Profile& profile() const noexcept { return profile_; }
@@ -144,6 +151,10 @@ class ExplorationRuntime {
   void take_results();
   void apply_events();
   [[nodiscard]] Pose2 odometry_at(double t, const OdometryMsg& fallback) const;
+  /// The inputs' time base stepped back: a new synchronizer and odometry history.
+  void restart_time();
+  void note_relocalization(std::size_t count, const Pose2& offset, std::pair<float, float> scores, double now_s);
+  void take_inputs(double now_s);
 
   CameraPoints camera_points_;  ///< the map update's frames, back-projected once (owned by whoever runs map_update)
   Profile profile_;
@@ -157,11 +168,15 @@ class ExplorationRuntime {
   ObstacleMemory memory_;
   std::optional<LoopCloser> loop_;
   // ---- the control thread
+  InputGuard guard_;
   ApproximateTimeCore sync_;
   std::unordered_map<std::uint64_t, RgbdImage> frames_;     ///< payloads waiting in the synchronizer, by id
   std::unordered_map<std::uint64_t, OdometryMsg> odometry_;
   std::uint64_t next_id_ = 0;
   double next_map_t_ = 0.0;
+  bool map_t_restart_ = false;  ///< the next set sets next_map_t_ (after restart_time())
+  double last_seen_t_ = -1.0;   ///< runtime time of the last set with a real frame (-1: none yet)
+  bool blind_ = false;
   Pose2 pose_;
   Pose2 odom_pose_;             ///< latest raw wheel odometry
   static constexpr std::size_t kOdomHistory = 256;  ///< odometry kept for interpolation (5 s at 50 Hz)

@@ -7,6 +7,7 @@
 #include <duet/runtime/localization/loop_closure_settings.hpp>
 #include <duet/runtime/localization/pose_correction_settings.hpp>
 #include <duet/runtime/navigation/explorer_settings.hpp>
+#include <duet/runtime/robot/input_guard_settings.hpp>
 #include <duet/runtime/robot/synchronizer.hpp>
 
 namespace duet {
@@ -26,6 +27,7 @@ struct RuntimeSettings {
   double decision_delay_s = 0.0;
   ExplorerSettings explorer;
   ApproximateTimeSettings sync;    ///< queue_size raised to hold two sensor periods of odometry
+  InputGuardSettings input;        ///< what counts as a bad input, a jump, a clock step, a silent sensor
   PoseCorrectionSettings pose_correction;
   /// Submaps, loop search and pose-graph optimisation (loop_closure.hpp); needs the pose correction.
   LoopClosureSettings loop_closure;

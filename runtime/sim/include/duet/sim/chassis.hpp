@@ -162,6 +162,10 @@ class SimChassis final : public ChassisInterface {
   /// True while stopped by a collision and waiting for a new command.
   [[nodiscard]] bool stopped_by_collision() const noexcept { return blocked_; }
   [[nodiscard]] std::size_t invalid_commands() const noexcept { return invalid_commands_; }
+  /// FAULT INJECTION (kidnap): moves the robot by `d` [m] in the world without its wheels
+  /// turning (the odometry does not see it). Refused (false, nothing moves) where the body would
+  /// collide or leave the floor.
+  bool displace(const Eigen::Vector2f& d);
   /// Odometry messages produced since the last call, in time order.
   [[nodiscard]] std::vector<OdometryMsg> take_odometry() override;
 

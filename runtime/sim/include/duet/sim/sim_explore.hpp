@@ -36,6 +36,7 @@
 #include <duet/sim/sim_robot.hpp>
 #include <duet/sim/world.hpp>
 #include <duet/runtime/robot/clock.hpp>
+#include <duet/runtime/robot/faults.hpp>
 #include <duet/runtime/robot/synchronizer.hpp>
 
 #include <cstdint>
@@ -66,6 +67,9 @@ struct ExploreSettings {
   /// robot), explorer, synchronizer, pose correction, loop closure. Its sensor_rate_hz is
   /// replaced by the render rate above.
   RuntimeSettings runtime;
+  /// Faults injected into the run (faults.hpp: "camera_stop:1@60+10", ...): the stream faults
+  /// between the simulated robot and the runtime, extrinsics and kidnap in the simulator.
+  std::vector<std::string> faults;
 };
 void validate(const ExploreSettings& s);
 
@@ -120,6 +124,12 @@ struct ExploreSummary {
   std::size_t map_sets_skipped = 0;      ///< background: map updates skipped while the last one ran
   bool loop_closure = false;             ///< the loop closer ran
   LoopClosureStats loops;                ///< its counters (all 0 without it)
+  std::vector<FaultCount> faults;        ///< each injected fault and how often it acted
+  InputStats input;                      ///< what the runtime's input guard did (input_guard.hpp)
+  std::uint64_t sets_with_missing = 0;   ///< sets mapped with a silent or garbled sensor left out
+  std::uint64_t blind_holds = 0;         ///< control periods held still with no frame mapped
+  std::size_t relocalizations = 0;       ///< wide re-matches that moved the pose
+  double occupied_on_obstacles = -1.0;   ///< share of the grid's occupied cells within 0.1 m of a true obstacle (-1: none occupied)
 };
 
 /// One collision (a contact onset of the chassis).
@@ -169,11 +179,16 @@ class SimExplore {
 
  private:
   void finish();  ///< the run has stopped: drain the runtime, the last curve point
+  void apply_sim_faults();  ///< extrinsics and kidnap at t_
+  [[nodiscard]] RobotSource& source() { return injector_ ? static_cast<RobotSource&>(*injector_) : robot_; }
+  [[nodiscard]] double occupied_on_obstacles() const;
 
   std::shared_ptr<const World> world_;
   Profile profile_;
   ExploreSettings settings_;
   SimRobot robot_;
+  std::unique_ptr<FaultInjector> injector_;  ///< between robot_ and the runtime when faults are injected
+  std::vector<bool> fault_started_;
   std::unique_ptr<ExplorationRuntime> runtime_;
   TruthGrid truth_;
   std::vector<std::uint8_t> reachable_;

@@ -34,6 +34,9 @@ class SimRgbdSensor final : public RgbdSensorInterface {
   [[nodiscard]] std::size_t frames_rendered() const noexcept { return rendered_; }
   /// When the next frame is due [s].
   [[nodiscard]] double next_due_s() const noexcept { return next_t_; }
+  /// FAULT INJECTION (extrinsics): the sensor's true mount is yawed by this about its own
+  /// position [rad] (the runtime still uses the profile's). 0 = as the profile says.
+  void set_mount_error(float yaw_rad) noexcept { mount_error_rad_ = yaw_rad; }
 
  private:
   const RgbdRenderer& renderer_;
@@ -42,6 +45,7 @@ class SimRgbdSensor final : public RgbdSensorInterface {
   double period_s_;
   double next_t_ = 0.0;
   std::uint64_t seed_;
+  float mount_error_rad_ = 0.0f;
   std::size_t rendered_ = 0;
   std::vector<StampedRgbd> out_;
   std::vector<RgbdImage> spare_;
@@ -70,6 +74,9 @@ class SimRobot final : public RobotSource {
   void advance(double now_s) override;
 
   [[nodiscard]] const SimChassis& sim_chassis() const noexcept { return chassis_; }
+  /// FAULT INJECTION: the simulated parts themselves (kidnap, extrinsics).
+  [[nodiscard]] SimChassis& sim_chassis() noexcept { return chassis_; }
+  [[nodiscard]] SimRgbdSensor& sim_sensor(std::size_t i) { return *sensors_.at(i); }
   [[nodiscard]] std::size_t frames_rendered() const;
   [[nodiscard]] double now_s() const noexcept { return t_; }
 
