@@ -16,7 +16,7 @@ import sys
 
 FAULTS = [
     "camera_stop:1@60+10", "camera_stop:2@60+10", "depth_zero:1@60+10", "depth_noise:2@60+10",
-    "color_black:1@60+10", "extrinsics:2@0", "wheel_slip@60+5", "odom_jump@60", "stamp_disorder:1@60+10",
+    "color_black:1@60+10", "extrinsics:2@0", "wheel_slip@60+2", "odom_jump@60", "stamp_disorder:1@60+10",
     "stamp_disorder:0@60+10", "stamp_duplicate:2@60+10", "stamp_duplicate:0@60+10", "stamp_late:1@60+10",
     "clock_back@60", "kidnap@60",
 ]

@@ -229,6 +229,12 @@ void validate(const DwaSettings& s) {
   check_int("v_samples", s.v_samples, 1, 1000, "[1, 1000]");
   check_int("omega_samples", s.omega_samples, 1, 1000, "[1, 1000]");
   check_int("steps", s.steps, 1, 1000, "[1, 1000]");
+  // Work budget: the rollout steps of one call.
+  const double rollout_steps = static_cast<double>(s.v_samples) * s.omega_samples * s.steps;
+  if (!(rollout_steps <= kMaxDwaRolloutSteps))
+    fail(ErrorCode::kInvalidArgument, "DwaSettings: v_samples * omega_samples * steps = " + std::to_string(static_cast<long long>(rollout_steps)) +
+                                          ", more than the budget of " + std::to_string(static_cast<long long>(kMaxDwaRolloutSteps)) +
+                                          " rollout steps per call");
   check_range("sim_time_s", s.sim_time_s, 0.0f, 60.0f, true, "(0, 60]");
   check_range("robot_radius_m", s.robot_radius_m, 0.0f, kInf, false, "[0, inf)");
   check_range("safety_margin_m", s.safety_margin_m, 0.0f, kInf, false, "[0, inf)");

@@ -251,6 +251,15 @@ void ObservationModel::observe(std::span<const Pose2> poses, std::span<const Sen
     else if (!within_map_limits({poses[p].x, poses[p].y}))
       fail(ErrorCode::kOutOfRange, "ObservationModel::observe: pose " + std::to_string(p) + " (" + fstr(poses[p].x) + ", " +
                                        fstr(poses[p].y) + ") is beyond the map frame's +-" + fstr(kMaxCoordinateM) + " m");
+  {
+    double cells = 0.0;  // every ray walked to its range, at most
+    for (const auto& sec : sensors) cells += static_cast<double>(sec.rays) * (2.0 * sec.max_range_m / std::max(m.view.resolution_m, kMinGridResolutionM) + 2.0);
+    cells *= static_cast<double>(poses.size());
+    if (!(cells <= kMaxObservedCells))
+      fail(ErrorCode::kInvalidArgument, "ObservationModel::observe: poses * the sensors' rays * their cells (" +
+                                            std::to_string(static_cast<long long>(cells)) + ") is more than the budget of " +
+                                            std::to_string(static_cast<long long>(kMaxObservedCells)) + " cell visits per call");
+  }
   std::vector<std::size_t> first(sensors.size());
   for (std::size_t s = 0, acc = 0; s < sensors.size(); ++s) {
     first[s] = acc;

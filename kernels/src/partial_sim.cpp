@@ -279,6 +279,19 @@ PartialSimResult partial_map_simulation(const ObservationModel& model, const Inf
              std::to_string(inflated.height) + ") differ in geometry");
   if (grid.cell_count() >= (std::size_t{1} << 30))
     fail(ErrorCode::kOutOfRange, "partial_map_simulation: grids of 2^30 cells or more are not supported");
+  {
+    // The cells one call may walk: every simulated observation walks every ray to its range.
+    double samples = 0.0;
+    for (int i = 1; i <= s.iterations; ++i) samples += static_cast<double>(s.phi_a) * i + s.phi_b;
+    double cells_per_fan = 0.0;
+    for (const SensorSector& sec : sensors) cells_per_fan += static_cast<double>(sec.rays) * (2.0 * sec.max_range_m / grid.resolution_m + 2.0);
+    const double cells = static_cast<double>(s.particles) * samples * s.stages * cells_per_fan;
+    if (!(cells <= kMaxSimulatedCells))
+      fail(ErrorCode::kInvalidArgument, "partial_map_simulation: particles * sum_i(phi_i) * stages * the sensors' rays * their cells (" +
+                                            std::to_string(static_cast<long long>(cells)) + ") is more than the budget of " +
+                                            std::to_string(static_cast<long long>(kMaxSimulatedCells)) +
+                                            " cell visits per call (fewer particles or rays, a shorter range or coarser cells)");
+  }
 
   auto& ws = workspace.impl();
   build_codes(model, s.min_logodds, ws.codes);

@@ -59,11 +59,11 @@ Field make_field(const ClearanceView& d, const Eigen::Vector2f& centre, float ra
   const auto cell = [&](double v, int min, int max) {
     return static_cast<int>(std::clamp(std::floor(v), static_cast<double>(min), static_cast<double>(max)));
   };
-  const double r = radius;
-  const int x0 = cell((centre.x() - r - d.origin.x()) / res - 1.0, -1, d.width + 1);
-  const int x1 = cell((centre.x() + r - d.origin.x()) / res + 2.0, -1, d.width + 1);
-  const int y0 = cell((centre.y() - r - d.origin.y()) / res - 1.0, -1, d.height + 1);
-  const int y1 = cell((centre.y() + r - d.origin.y()) / res + 2.0, -1, d.height + 1);
+  const double rad = radius;
+  const int x0 = cell((centre.x() - rad - d.origin.x()) / res - 1.0, -1, d.width + 1);
+  const int x1 = cell((centre.x() + rad - d.origin.x()) / res + 2.0, -1, d.width + 1);
+  const int y0 = cell((centre.y() - rad - d.origin.y()) / res - 1.0, -1, d.height + 1);
+  const int y1 = cell((centre.y() + rad - d.origin.y()) / res + 2.0, -1, d.height + 1);
   if (x1 <= x0 + 1 || y1 <= y0 + 1) return f;  // the window misses the grid: w, h stay 0 (every sample 0)
   f.x0 = x0;
   f.y0 = y0;
@@ -162,6 +162,13 @@ void validate(const ScanMatchSettings& s) {
   if (s.linear_window_m / s.linear_step_m > 200.0f) bad("linear_window_m / linear_step_m", s.linear_window_m / s.linear_step_m, "[0, 200]");
   if (s.angular_window_deg / s.angular_step_deg > 200.0f)
     bad("angular_window_deg / angular_step_deg", s.angular_window_deg / s.angular_step_deg, "[0, 200]");
+  // Work budget: the lattice's poses (each scores every point).
+  const double nl = std::floor(s.linear_window_m / s.linear_step_m + 1e-4), na = std::floor(s.angular_window_deg / s.angular_step_deg + 1e-4);
+  const double poses = (2.0 * nl + 1.0) * (2.0 * nl + 1.0) * (2.0 * na + 1.0);
+  if (!(poses <= kMaxScanMatchPoses))
+    fail(ErrorCode::kInvalidArgument, "ScanMatchSettings: the windows and steps make " + std::to_string(static_cast<long long>(poses)) +
+                                          " lattice poses, more than the budget of " + std::to_string(static_cast<long long>(kMaxScanMatchPoses)) +
+                                          " (narrow linear_window_m / angular_window_deg or raise linear_step_m / angular_step_deg)");
 }
 
 void occupied_distance(const GridView& grid, const CellThresholds& thresholds, InflatedGrid& out) {

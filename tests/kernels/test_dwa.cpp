@@ -737,6 +737,11 @@ TEST(Dwa, InvalidInputsThrow) {
   const DwaSettings ok;
   const auto inv = ErrorCode::kInvalidArgument;
   EXPECT_DUET_ERROR(dwa_step(view, Pose2{kNaN, 0.5f, 0.0f}, Twist{}, path, ok, st, ws), inv, "pose");
+  DwaSettings heavy;  // each count within its range, the product over the work budget
+  heavy.v_samples = heavy.omega_samples = 1000;
+  EXPECT_DUET_ERROR(dwa_step(view, Pose2{1.0f, 0.5f, 0.0f}, Twist{}, path, heavy, st, ws), inv, "rollout steps per call");
+  heavy.steps = 1;  // 1e6: exactly the budget
+  EXPECT_NO_THROW(dwa_step(view, Pose2{1.0f, 0.5f, 0.0f}, Twist{}, path, heavy, st, ws));
   EXPECT_DUET_ERROR(dwa_step(view, Pose2{1.0f, 0.5f, kInf}, Twist{}, path, ok, st, ws), inv, "pose");
   EXPECT_DUET_ERROR(dwa_step(view, Pose2{1.0f, 0.5f, 0.0f}, Twist{kNaN, 0.0f}, path, ok, st, ws), inv, "twist");
   const std::vector<V2> bad_path{V2(0.5f, 0.5f), V2(kNaN, 0.5f)};

@@ -873,6 +873,13 @@ TEST(ObservationModel, InvalidSettingsAndSizesThrow) {
     far_mount[0].x_m = 3e38f;
     EXPECT_DUET_ERROR(m.observe(poses, far_mount, out), ErrorCode::kInvalidArgument, "x_m");
     EXPECT_NO_THROW(m.observe(std::vector<Pose2>{Pose2{9999.0f, -9999.0f, 1e30f}}, sensors, out60));
+    // The work budget: 100000 rays of 100 m on a 5 cm grid at 300 poses would walk 1.2e12 cells.
+    std::vector<SensorSector> wide(1);
+    wide[0].rays = 100000;
+    wide[0].max_range_m = 100.0f;
+    const std::vector<Pose2> many(300);
+    std::vector<RayObservation> big(300 * 100000);
+    EXPECT_DUET_ERROR(m.observe(many, wide, big), ErrorCode::kInvalidArgument, "cell visits per call");
   }
 }
 

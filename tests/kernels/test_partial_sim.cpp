@@ -10,6 +10,7 @@
 #include <cmath>
 #include <random>
 #include <set>
+#include <string>
 #include <vector>
 
 namespace duet {
@@ -414,6 +415,27 @@ TEST(PartialSim, SettingsThatWouldTakeMinutesAreRefusedByTheBudgets) {
   s = {};
   s.particles = 12500;  // 12500 * 20 * 4 = 1e6: exactly the budget
   EXPECT_EQ(message(s), "");
+}
+
+TEST(PartialSim, TheCellBudgetIsCheckedWithTheSensorsAndTheGrid) {
+  // 12500 particles pass validate() (1e6 simulated observations), but with 60 rays of 5 m on a
+  // 5 cm grid they would walk 1.2e10 cells: refused at the call, naming the budget.
+  const TestGrid g = door_room();
+  Prepared p(g);
+  const auto sensors = paper_dual_sensors(30);
+  PartialSimWorkspace ws;
+  PartialSimSettings s;
+  s.particles = 12500;
+  EXPECT_NO_THROW(validate(s));
+  try {
+    (void)partial_map_simulation(p.model, p.inflated, Pose2{2.0f, 5.0f, 0.0f}, sensors, s, ws);
+    ADD_FAILURE() << "1.2e10 cell visits accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    EXPECT_NE(std::string(e.what()).find("cell visits per call"), std::string::npos) << e.what();
+  }
+  s.particles = 1000;  // 9.7e8 cells: within it
+  EXPECT_NO_THROW((void)partial_map_simulation(p.model, p.inflated, Pose2{2.0f, 5.0f, 0.0f}, sensors, s, ws));
 }
 
 TEST(PartialSim, InvalidInputsThrow) {

@@ -292,6 +292,19 @@ TEST(ScanMatch, InvalidInputThrows) {
   ClearanceView bad_res = m.field.clearance();
   bad_res.resolution_m = 0.0f;
   EXPECT_THROW((void)scan_match(bad_res, pts, Pose2{3.0f, 3.0f, 0.0f}), Error);
+  {  // within the per-axis limits (200 steps each way) but 401^3 = 6.4e7 lattice poses: refused
+    ScanMatchSettings s;
+    s.linear_window_m = 2.0f;
+    s.linear_step_m = 0.01f;
+    s.angular_window_deg = 20.0f;
+    s.angular_step_deg = 0.1f;
+    try {
+      (void)scan_match(m.field.clearance(), pts, Pose2{3.0f, 3.0f, 0.0f}, s);
+      ADD_FAILURE() << "6.4e7 lattice poses accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("lattice poses, more than the budget"), std::string::npos) << e.what();
+    }
+  }
   auto expect_bad = [&](auto mutate, const char* field) {
     ScanMatchSettings s;
     mutate(s);

@@ -83,6 +83,23 @@ TEST(SettingsTree, DefaultsWithAnInfiniteLimitRoundTrip) {
   }
 }
 
+// Procedure 1's cell budget is checked with the profile's sensors and grid (issue 19), naming
+// the key, so that a profile that loads does not fail at its first decision.
+TEST(SettingsTree, TheDecisionsCellBudgetIsCheckedAtLoad) {
+  const std::string y = duet::to_yaml(duet::builtin_profile("dual"));
+  const std::vector<duet::ProfileOverlay> heavy{duet::set_overlay("exploration.simulation.particles=5000")};
+  try {
+    (void)duet::parse_profile(y, "dual.yaml", heavy);
+    ADD_FAILURE() << "5000 particles (4.8e9 cell visits per decision) accepted";
+  } catch (const duet::Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("exploration.simulation.particles"), std::string::npos) << m;
+    EXPECT_NE(m.find("cell visits per decision"), std::string::npos) << m;
+  }
+  const std::vector<duet::ProfileOverlay> ok{duet::set_overlay("exploration.simulation.particles=1000")};
+  EXPECT_NO_THROW((void)duet::parse_profile(y, "dual.yaml", ok));
+}
+
 // Each key of the written tree, set to its own value by --set, reads back to the same tree (the
 // readers accept every key the writer writes); set to a value out of every range, it is either
 // accepted or rejected with a message naming that key.

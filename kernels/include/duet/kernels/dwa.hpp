@@ -72,6 +72,10 @@
 
 namespace duet {
 
+/// Work budget of one dwa_step(): v_samples * omega_samples * steps rollout steps at most (the
+/// defaults: 24k, ~75 us; the budget ~3 ms - a 20 Hz controller's share).
+inline constexpr double kMaxDwaRolloutSteps = 1e6;
+
 struct DwaSettings {
   ChassisLimits limits;  ///< speed/acceleration limits of the chassis (DESIGN.md §7: 0.5 m/s)
   /// Paper's motion constraint: |omega| bound while mapping [rad/s], (0, inf). 0.8 rad/s = 46

@@ -37,6 +37,10 @@
 
 namespace duet {
 
+/// Work budget of one match: (2 nl + 1)^2 (2 na + 1) lattice poses at most (nl, na: the windows
+/// over the steps), each scoring every point (the defaults: 343; a relocalisation's: 18k).
+inline constexpr double kMaxScanMatchPoses = 1e6;
+
 struct ScanMatchSettings {
   float linear_window_m = 0.15f;     ///< search +-this in x and y around the prior [m], [0, 5]
   float angular_window_deg = 1.5f;   ///< search +-this in heading [deg], [0, 45]
