@@ -658,10 +658,10 @@ typedef struct duet_partial_sim_settings {
   int phi_a, phi_b;              /* (default 1, 1) */
   int stages;                    /* H, [1, 100] (default 4) */
   float stage_dt_s;              /* duration of each simulated motion, (0, 60] [s] (default 1.0) */
-  float v_min_mps, v_max_mps;    /* U_range of v, v_min <= v_max, v_max > 0 [m/s] (default 0.1, 0.5) */
-  float omega_max_rps;           /* U_range of |omega|, >= 0 [rad/s] (default 0.8) */
-  float sigma_v_mps;             /* Sigma of zeta_i, i >= 2, >= 0 [m/s] (default 0.08) */
-  float sigma_omega_rps;         /* >= 0 [rad/s] (default 0.3) */
+  float v_min_mps, v_max_mps;    /* U_range of v, in [-10, 10], v_min <= v_max, v_max > 0 [m/s] (default 0.1, 0.5) */
+  float omega_max_rps;           /* U_range of |omega|, [0, 100] [rad/s] (default 0.8) */
+  float sigma_v_mps;             /* Sigma of zeta_i, i >= 2, [0, 10] [m/s] (default 0.08) */
+  float sigma_omega_rps;         /* [0, 100] [rad/s] (default 0.3) */
   float resample_ess_fraction;   /* eps_N = fraction * N, (0, 1] (default 0.5) */
   float gamma;                   /* discount of line 19, (0, 10] (default 0.9) */
   float unknown_hit_probability; /* chi: P(unknown cell occupied), (0, 1) (default 0.02) */

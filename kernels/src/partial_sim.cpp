@@ -20,10 +20,11 @@ namespace duet {
 namespace {
 
 // floor() to int without a libm call (baseline x86-64 has no roundss): the walks and rollouts
-// call it per jump and per sub-step. Clamped to +-1e9 first, so the conversion is defined for any
-// finite input (callers never pass NaN).
+// call it per jump and per sub-step. Clamped to +-1e9 first (NaN to -1e9), so the conversion is
+// defined for any input.
 inline int floor_int(float x) noexcept {
-  x = std::min(std::max(x, -1e9f), 1e9f);
+  x = x > -1e9f ? x : -1e9f;  // also NaN -> -1e9 (off any grid): no undefined conversion
+  x = x < 1e9f ? x : 1e9f;
   const int i = static_cast<int>(x);
   return i - (static_cast<float>(i) > x ? 1 : 0);
 }
@@ -105,11 +106,15 @@ void validate(const PartialSimSettings& s) {
                                             " at i = " + std::to_string(i) + " is outside [1, 1000]");
   }
   if (!finite(s.stage_dt_s) || !(s.stage_dt_s > 0.0f) || s.stage_dt_s > 60.0f) bad("stage_dt_s", s.stage_dt_s, "(0, 60]");
-  if (!finite(s.v_min_mps) || !finite(s.v_max_mps) || s.v_min_mps > s.v_max_mps || s.v_max_mps <= 0.0f)
-    bad("v_min_mps/v_max_mps", s.v_min_mps, "finite with v_min_mps <= v_max_mps and v_max_mps > 0");
-  if (!finite(s.omega_max_rps) || s.omega_max_rps < 0.0f) bad("omega_max_rps", s.omega_max_rps, "[0, inf)");
-  if (!finite(s.sigma_v_mps) || s.sigma_v_mps < 0.0f) bad("sigma_v_mps", s.sigma_v_mps, "[0, inf)");
-  if (!finite(s.sigma_omega_rps) || s.sigma_omega_rps < 0.0f) bad("sigma_omega_rps", s.sigma_omega_rps, "[0, inf)");
+  // Speeds within a robot's (found by fuzz_capi: |v| or |omega| near 3e38 made the rollouts'
+  // poses NaN; and |v_min| beyond v_max escaped the sub-step budget).
+  if (!finite(s.v_min_mps) || !finite(s.v_max_mps) || s.v_min_mps > s.v_max_mps || s.v_max_mps <= 0.0f || s.v_min_mps < -10.0f ||
+      s.v_max_mps > 10.0f)
+    bad("v_min_mps/v_max_mps", s.v_min_mps, "[-10, 10] m/s with v_min_mps <= v_max_mps and v_max_mps > 0");
+  if (!finite(s.omega_max_rps) || s.omega_max_rps < 0.0f || s.omega_max_rps > 100.0f) bad("omega_max_rps", s.omega_max_rps, "[0, 100] rad/s");
+  if (!finite(s.sigma_v_mps) || s.sigma_v_mps < 0.0f || s.sigma_v_mps > 10.0f) bad("sigma_v_mps", s.sigma_v_mps, "[0, 10] m/s");
+  if (!finite(s.sigma_omega_rps) || s.sigma_omega_rps < 0.0f || s.sigma_omega_rps > 100.0f)
+    bad("sigma_omega_rps", s.sigma_omega_rps, "[0, 100] rad/s");
   if (!finite(s.resample_ess_fraction) || !(s.resample_ess_fraction > 0.0f) || s.resample_ess_fraction > 1.0f)
     bad("resample_ess_fraction", s.resample_ess_fraction, "(0, 1]");
   if (!finite(s.gamma) || !(s.gamma > 0.0f) || s.gamma > 10.0f) bad("gamma", s.gamma, "(0, 10]");
@@ -130,7 +135,7 @@ void validate(const PartialSimSettings& s) {
   // Work budgets (issue 19: a range bounds the work it causes). Defaults use 20 sub-steps per
   // stage and 8000 particle-sample-stages per call (about 25 ms on 2 cores on a real state);
   // the budgets allow 500x and 125x that, so one call stays within a few seconds.
-  const double sub_steps = static_cast<double>(s.v_max_mps) * s.stage_dt_s / s.collision_step_m;
+  const double sub_steps = std::max(static_cast<double>(s.v_max_mps), -static_cast<double>(s.v_min_mps)) * s.stage_dt_s / s.collision_step_m;
   if (!(sub_steps <= kMaxRolloutSubSteps))
     fail(ErrorCode::kInvalidArgument, "PartialSimSettings: v_max_mps * stage_dt_s / collision_step_m = " + std::to_string(sub_steps) +
                                           " rollout sub-steps per stage, more than the budget of " +

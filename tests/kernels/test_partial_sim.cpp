@@ -415,6 +415,22 @@ TEST(PartialSim, SettingsThatWouldTakeMinutesAreRefusedByTheBudgets) {
   s = {};
   s.particles = 12500;  // 12500 * 20 * 4 = 1e6: exactly the budget
   EXPECT_EQ(message(s), "");
+  // Speeds within a robot's (fuzz_capi: speeds near 3e38 made the rollouts' poses NaN).
+  s = {};
+  s.v_max_mps = 3e38f;
+  EXPECT_NE(message(s).find("v_min_mps/v_max_mps"), std::string::npos) << message(s);
+  s = {};
+  s.v_min_mps = -3e38f;
+  EXPECT_NE(message(s).find("v_min_mps/v_max_mps"), std::string::npos) << message(s);
+  s = {};
+  s.omega_max_rps = 1e30f;
+  EXPECT_NE(message(s).find("omega_max_rps"), std::string::npos) << message(s);
+  s = {};
+  s.sigma_omega_rps = 1e30f;
+  EXPECT_NE(message(s).find("sigma_omega_rps"), std::string::npos) << message(s);
+  s = {};
+  s.v_min_mps = -5.0f;  // backwards at 5 m/s: within the speeds, 200 sub-steps at 2.5 cm
+  EXPECT_EQ(message(s), "");
 }
 
 TEST(PartialSim, TheCellBudgetIsCheckedWithTheSensorsAndTheGrid) {

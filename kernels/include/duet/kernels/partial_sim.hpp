@@ -90,7 +90,8 @@ struct PartialSimSettings {
   float collision_step_m = 0.025f;   ///< rollout checked against the inflated grid every this [m] (half a cell)
   std::uint64_t seed = 1;            ///< random streams are derived from it
 };
-/// Checks every field's range and the work budgets: v_max_mps * stage_dt_s / collision_step_m
+/// Checks every field's range (speeds within [-10, 10] m/s and 100 rad/s) and the work budgets:
+/// max(v_max_mps, -v_min_mps) * stage_dt_s / collision_step_m
 /// <= kMaxRolloutSubSteps (sub-steps of one stage's rollout) and particles * sum_i(phi_i) *
 /// stages <= kMaxParticleSampleStages (simulated observations of one call), so that one call
 /// stays within a few seconds whatever the settings.
