@@ -31,9 +31,9 @@ inline const std::filesystem::path& scratch() {
     std::filesystem::path path;
     Dir() {
       const char* base = std::getenv("TMPDIR");
-      std::string templ = std::string(base && *base ? base : "/tmp") + "/duet_fuzz_XXXXXX";
-      if (!::mkdtemp(templ.data())) std::abort();
-      path = templ;
+      std::string dir = std::string(base && *base ? base : "/tmp") + "/duet_fuzz_XXXXXX";  // mkdtemp fills in the Xs
+      if (!::mkdtemp(dir.data())) std::abort();
+      path = dir;
     }
     ~Dir() {
       std::error_code ec;

@@ -43,6 +43,13 @@ std::vector<SensorSector> paper_dual_sensors(int rays_per_sensor) {
   return {s1, s2};
 }
 
+double fan_cells(std::span<const SensorSector> sensors, float resolution_m) {
+  const double res = std::max(resolution_m, kMinGridResolutionM);
+  double cells = 0.0;  // every ray walked to its range, at most
+  for (const auto& sec : sensors) cells += static_cast<double>(sec.rays) * (2.0 * sec.max_range_m / res + 2.0);
+  return cells;
+}
+
 void validate(const SensorSector& s) {
   if (!std::isfinite(s.x_m) || !std::isfinite(s.y_m) || !std::isfinite(s.yaw_rad))
     fail(ErrorCode::kInvalidArgument, "SensorSector: x_m, y_m, yaw_rad must be finite");
@@ -252,9 +259,7 @@ void ObservationModel::observe(std::span<const Pose2> poses, std::span<const Sen
       fail(ErrorCode::kOutOfRange, "ObservationModel::observe: pose " + std::to_string(p) + " (" + fstr(poses[p].x) + ", " +
                                        fstr(poses[p].y) + ") is beyond the map frame's +-" + fstr(kMaxCoordinateM) + " m");
   {
-    double cells = 0.0;  // every ray walked to its range, at most
-    for (const auto& sec : sensors) cells += static_cast<double>(sec.rays) * (2.0 * sec.max_range_m / std::max(m.view.resolution_m, kMinGridResolutionM) + 2.0);
-    cells *= static_cast<double>(poses.size());
+    const double cells = static_cast<double>(poses.size()) * fan_cells(sensors, m.view.resolution_m);
     if (!(cells <= kMaxObservedCells))
       fail(ErrorCode::kInvalidArgument, "ObservationModel::observe: poses * the sensors' rays * their cells (" +
                                             std::to_string(static_cast<long long>(cells)) + ") is more than the budget of " +

@@ -140,13 +140,17 @@ void validate(const PartialSimSettings& s) {
     fail(ErrorCode::kInvalidArgument, "PartialSimSettings: v_max_mps * stage_dt_s / collision_step_m = " + std::to_string(sub_steps) +
                                           " rollout sub-steps per stage, more than the budget of " +
                                           std::to_string(static_cast<long>(kMaxRolloutSubSteps)) + " (raise collision_step_m)");
-  double samples = 0.0;
-  for (int i = 1; i <= s.iterations; ++i) samples += static_cast<double>(s.phi_a) * i + s.phi_b;
-  const double work = static_cast<double>(s.particles) * samples * s.stages;
+  const double work = simulated_observations(s);
   if (!(work <= kMaxParticleSampleStages))
     fail(ErrorCode::kInvalidArgument, "PartialSimSettings: particles * sum_i(phi_i) * stages = " + std::to_string(static_cast<long long>(work)) +
                                           ", more than the budget of " + std::to_string(static_cast<long>(kMaxParticleSampleStages)) +
                                           " simulated observations per decision");
+}
+
+double simulated_observations(const PartialSimSettings& s) {
+  double samples = 0.0;
+  for (int i = 1; i <= s.iterations; ++i) samples += static_cast<double>(s.phi_a) * i + s.phi_b;
+  return static_cast<double>(s.particles) * samples * s.stages;
 }
 
 namespace {
@@ -286,11 +290,7 @@ PartialSimResult partial_map_simulation(const ObservationModel& model, const Inf
     fail(ErrorCode::kOutOfRange, "partial_map_simulation: grids of 2^30 cells or more are not supported");
   {
     // The cells one call may walk: every simulated observation walks every ray to its range.
-    double samples = 0.0;
-    for (int i = 1; i <= s.iterations; ++i) samples += static_cast<double>(s.phi_a) * i + s.phi_b;
-    double cells_per_fan = 0.0;
-    for (const SensorSector& sec : sensors) cells_per_fan += static_cast<double>(sec.rays) * (2.0 * sec.max_range_m / grid.resolution_m + 2.0);
-    const double cells = static_cast<double>(s.particles) * samples * s.stages * cells_per_fan;
+    const double cells = simulated_observations(s) * fan_cells(sensors, grid.resolution_m);
     if (!(cells <= kMaxSimulatedCells))
       fail(ErrorCode::kInvalidArgument, "partial_map_simulation: particles * sum_i(phi_i) * stages * the sensors' rays * their cells (" +
                                             std::to_string(static_cast<long long>(cells)) + ") is more than the budget of " +

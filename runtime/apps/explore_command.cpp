@@ -189,7 +189,7 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                 {"frames_garbled", in.frames_garbled},
                 {"clock_restarts", in.clock_restarts},
                 {"sensor_silences", in.sensor_silences},
-                {"missing_frames_added", in.placeholders},
+                {"missing_frames_added", in.missing_frames},
                 {"sets_with_missing_frames", s.sets_with_missing},
                 {"blind_hold_periods", s.blind_holds},
                 {"relocalizations", s.relocalizations}};

@@ -265,13 +265,13 @@ TEST(InputGuard, TellsGarbledFromEmptyFromRealFramesAndFindsASilentSensor) {
   small.image.width = 10;
   EXPECT_EQ(s.g.frame(0, small, 4.0, missing), duet::InputGuard::Verdict::kDrop);
   EXPECT_EQ(s.g.frame(0, duet_test::wall_frame(sp, 3.0), 4.0, missing), duet::InputGuard::Verdict::kDrop);  // repeated stamp
-  // Sensor 2 never spoke: after 2.5 frame periods of sensor 1 it is silent and gets placeholders.
-  EXPECT_TRUE(s.g.placeholders(0, 3.0, 3.0).empty());
-  EXPECT_EQ(s.g.placeholders(0, 4.0, 4.0), (std::vector<std::size_t>{1}));
+  // Sensor 2 never spoke: after 2.5 frame periods of sensor 1 it is silent and gets missing frames.
+  EXPECT_TRUE(s.g.silent_sensors(0, 3.0, 3.0).empty());
+  EXPECT_EQ(s.g.silent_sensors(0, 4.0, 4.0), (std::vector<std::size_t>{1}));
   EXPECT_EQ(s.g.stats().sensor_silences, 1u);
-  // It speaks again: no more placeholders.
+  // It speaks again: no more missing frames.
   EXPECT_EQ(s.g.frame(1, duet_test::wall_frame(s.profile.sensors[1], 5.0), 5.0, missing), duet::InputGuard::Verdict::kAccept);
-  EXPECT_TRUE(s.g.placeholders(0, 5.0, 5.0).empty());
+  EXPECT_TRUE(s.g.silent_sensors(0, 5.0, 5.0).empty());
 }
 
 // ---- scenarios on short runs ---------------------------------------------------------------------

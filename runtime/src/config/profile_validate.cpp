@@ -191,13 +191,7 @@ void validate_profile(const Profile& p, const Locator& loc) {
   {
     // Procedure 1's cell budget (kMaxSimulatedCells) with this robot's fans and grid: checked here
     // so that a profile that passes does not fail at the first decision.
-    const PartialSimSettings& sim = ex.strategy.simulation;
-    double samples = 0.0;
-    for (int i = 1; i <= sim.iterations; ++i) samples += static_cast<double>(sim.phi_a) * i + sim.phi_b;
-    double cells_per_fan = 0.0;
-    for (const SensorProfile& sp : p.sensors)
-      cells_per_fan += static_cast<double>(ex.rays_per_sensor) * (2.0 * sp.max_depth_m / m.grid_resolution_m + 2.0);
-    const double cells = static_cast<double>(sim.particles) * samples * sim.stages * cells_per_fan;
+    const double cells = simulated_observations(ex.strategy.simulation) * fan_cells(observation_sectors(p), m.grid_resolution_m);
     if (!(cells <= kMaxSimulatedCells))
       check.fail_at("exploration.simulation.particles",
                     "particles * sum_i(phi_i) * stages * rays_per_sensor * the sensors' cells (max_depth_m / grid_resolution_m) = " +

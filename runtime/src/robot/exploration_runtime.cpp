@@ -519,7 +519,7 @@ void ExplorationRuntime::take_inputs(double now_s) {
   // A silent sensor (nothing this tick, nothing for a while) gets a missing frame beside each
   // frame of the others, so sets form without it.
   for (const auto& [i, stamp] : accepted)
-    for (const std::size_t j : guard_.placeholders(i, stamp, now_s)) {
+    for (const std::size_t j : guard_.silent_sensors(i, stamp, now_s)) {
       const std::uint64_t pid = next_id_++;
       frames_.emplace(pid, RgbdImage{});
       (void)sync_.add(j, stamp, pid);

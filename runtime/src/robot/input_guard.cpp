@@ -162,7 +162,7 @@ InputGuard::Verdict InputGuard::frame(std::size_t i, const StampedRgbd& f, doubl
   return Verdict::kAccept;
 }
 
-std::vector<std::size_t> InputGuard::placeholders(std::size_t from_sensor, double stamp, double now_s) {
+std::vector<std::size_t> InputGuard::silent_sensors(std::size_t from_sensor, double stamp, double now_s) {
   std::vector<std::size_t> out;
   const double timeout = settings_.sensor_timeout_periods * sensor_period_s_;
   for (std::size_t j = 0; j < sensors_.size(); ++j) {
@@ -178,7 +178,7 @@ std::vector<std::size_t> InputGuard::placeholders(std::size_t from_sensor, doubl
     if (have_frame_[j] && !(stamp > last_frame_t_[j])) continue;
     have_frame_[j] = true;
     last_frame_t_[j] = stamp;
-    ++stats_.placeholders;
+    ++stats_.missing_frames;
     out.push_back(j);
   }
   return out;

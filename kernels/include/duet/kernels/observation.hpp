@@ -73,6 +73,11 @@ struct SensorSector {
 /// (facing right); Kinect 57 deg, 0.5-5 m (DESIGN.md §7). Throws if rays_per_sensor < 1.
 std::vector<SensorSector> paper_dual_sensors(int rays_per_sensor = 30);
 
+/// The most cells one fan of every sensor walks on a grid of `resolution_m` cells [m] (clamped to
+/// kMinGridResolutionM): the sum of rays * (2 max_range / resolution + 2) - the unit of the
+/// observation and Procedure 1 work budgets.
+[[nodiscard]] double fan_cells(std::span<const SensorSector> sensors, float resolution_m);
+
 /// Throws duet::Error(kInvalidArgument) naming the field and its range.
 void validate(const SensorSector& s);
 /// Each sector, and the span must be non-empty.

@@ -96,6 +96,8 @@ struct PartialSimSettings {
 /// stages <= kMaxParticleSampleStages (simulated observations of one call), so that one call
 /// stays within a few seconds whatever the settings.
 void validate(const PartialSimSettings& s);
+/// Simulated observations of one call: particles * sum_i(phi_i) * stages (see the budgets).
+[[nodiscard]] double simulated_observations(const PartialSimSettings& s);
 inline constexpr double kMaxRolloutSubSteps = 1e4;
 inline constexpr double kMaxParticleSampleStages = 1e6;
 /// With the sensors and the grid known (partial_map_simulation()): the cells one call may walk,

@@ -16,8 +16,8 @@
 ///    depth is noise (most neighbouring pixels differ by more than garbled_step_m - a real
 ///    scene is piecewise smooth): counted and replaced by a missing frame.
 ///  - A sensor silent for sensor_timeout_periods frame periods while another delivers: counted
-///    once per silence; the runtime maps with the others (placeholders() gives the missing
-///    frames to add so that sets still form) until it speaks again.
+///    once per silence; the runtime maps with the others (silent_sensors() names the sensors to
+///    add a missing frame for, so that sets still form) until it speaks again.
 ///
 /// Each event is logged (events(), capped) with its time. Not thread-safe: the control thread.
 #include <duet/runtime/config/profile.hpp>
@@ -40,7 +40,7 @@ struct InputStats {
   std::uint64_t frames_garbled = 0;         ///< depth that is noise: mapped as missing
   std::uint64_t clock_restarts = 0;         ///< stamps stepped back beyond clock_step_back_s
   std::uint64_t sensor_silences = 0;        ///< a sensor went silent while another delivered
-  std::uint64_t placeholders = 0;           ///< missing frames added for silent sensors
+  std::uint64_t missing_frames = 0;         ///< missing frames added for silent sensors
 };
 
 struct RuntimeEvent {
@@ -63,7 +63,7 @@ class InputGuard {
   /// The sensors now considered silent for which a missing frame should be added beside a frame
   /// stamped `stamp` of another sensor (their last stamps are advanced to it). Call after every
   /// frame of the period has passed frame(), so a sensor that delivered is not silent.
-  std::vector<std::size_t> placeholders(std::size_t from_sensor, double stamp, double now_s);
+  std::vector<std::size_t> silent_sensors(std::size_t from_sensor, double stamp, double now_s);
   /// Forgets the last stamps (after a restart of the time base).
   void restart(double now_s, const std::string& why);
 
