@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <limits>
+#include <random>
 #include <vector>
 
 #include "half_known_room.hpp"
@@ -149,6 +150,43 @@ TEST(TrailLayer, ClearsOnlyUnknownCellsWhollyUnderTheBodyAndTheStartDisc) {
       const bool want = (c - Eigen::Vector2f(1.0f, 1.0f)).norm() <= 0.35f || (c - Eigen::Vector2f(3.0f, 3.0f)).norm() <= later_r;
       ASSERT_EQ(!std::isnan(g.logodds()[g.index(x, y)]), want) << x << "," << y;
     }
+}
+
+// The trail's cells are cached per grid geometry (a patrol's map update costs the cells, not the
+// trail's length): whatever the sequence of points, grids and shifts, apply() gives what a
+// fresh layer with the same points gives (the plain definition), cell for cell.
+TEST(TrailLayer, CachedCellsEqualAFreshLayerAcrossPointsGeometriesAndShifts) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.3f, 3.7f);
+  duet::TrailLayer cached(0.2f, 0.3f, -2.0f);
+  std::vector<Eigen::Vector2f> points;
+  auto check = [&](const duet::OccupancyGrid& blank, const char* when) {
+    duet::OccupancyGrid a = blank, b = blank;
+    cached.apply(a);
+    duet::TrailLayer fresh(0.2f, 0.3f, -2.0f);
+    for (const Eigen::Vector2f& p : cached.points()) fresh.add(p);
+    ASSERT_EQ(fresh.points().size(), cached.points().size());
+    fresh.apply(b);
+    int cleared = 0;
+    for (std::size_t i = 0; i < a.logodds().size(); ++i) {
+      const float x = a.logodds()[i], y = b.logodds()[i];
+      ASSERT_TRUE((std::isnan(x) && std::isnan(y)) || x == y) << when << ": cell " << i;
+      cleared += !std::isnan(x) && std::isnan(blank.logodds()[i]);
+    }
+    EXPECT_GT(cleared, 0) << when;
+  };
+  duet::OccupancyGrid g1(0.05f, Eigen::Vector2f(0.0f, 0.0f), 80, 80);  // all unknown
+  g1.logodds()[g1.index(30, 30)] = 3.0f;                              // a known cell
+  duet::OccupancyGrid g2(0.05f, Eigen::Vector2f(-0.5f, -0.25f), 100, 90);  // the map grew
+  for (int round = 0; round < 6; ++round) {
+    for (int k = 0; k < 20; ++k) cached.add(Eigen::Vector2f(u(rng), u(rng)));
+    check(round < 3 ? g1 : g2, "points added");
+    check(round < 3 ? g1 : g2, "again, nothing new");
+    if (round == 4) {
+      cached.shift(duet::Pose2{0.1f, -0.05f, 0.05f});
+      check(g2, "after a shift");
+    }
+  }
 }
 
 TEST(LayeredCostmap, LayersApplyInOrderOnOneCopy) {

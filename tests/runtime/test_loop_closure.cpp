@@ -197,6 +197,51 @@ TEST(Mapper, SubmapsHoldTheirObservationsAndMoveTheGrid) {
   EXPECT_EQ(mapper.submaps()[1].placement.x, 1.0f);
 }
 
+// A finished map (LoopCloser::freeze(), when exploration ends): no submap opens and no loop
+// search runs however long the robot goes on, while the mapper still takes the observations.
+TEST(LoopClosure, FrozenMapOpensNoSubmapAndSearchesNoLoop) {
+  const Profile profile = builtin_profile("dual");
+  const sim::World world = sim::builtin_world("lab");
+  const sim::RgbdRenderer renderer(world);
+  Mapper mapper(profile.mapping);
+  LoopClosureSettings ls;
+  ls.submap_duration_s = 4.0;
+  ls.min_age_s = 8.0;
+  ls.check_period_s = 1.0;
+  LoopCloser lc(ls, profile.exploration.cells, mapper);
+  std::vector<RgbdImage> images(profile.sensors.size());
+  const std::vector<Step> path = loop_path();
+  auto step = [&](std::size_t k, double t) {
+    std::vector<SensorFrame> frames;
+    for (std::size_t i = 0; i < profile.sensors.size(); ++i) {
+      const SensorProfile& sp = profile.sensors[i];
+      renderer.render(sp, to_isometry(path[k].truth) * sp.T_robot_optical(), k * 10 + i, images[i]);
+      frames.push_back(frame_view(images[i], sp, sp.T_robot_optical()));
+    }
+    mapper.integrate(frames, to_isometry(path[k].truth));
+    (void)lc.update(mapper, path[k].truth, t);
+  };
+  std::size_t k = 0;
+  for (; k < path.size() / 2; ++k) step(k, static_cast<double>(k));
+  const std::size_t submaps = mapper.submaps().size();
+  const std::size_t checks = lc.stats().checks;
+  ASSERT_GE(submaps, 3u);
+  ASSERT_GT(checks, 0u);
+  EXPECT_FALSE(lc.frozen());
+  EXPECT_EQ(lc.stats().frozen_at_s, -1.0);
+  lc.freeze(static_cast<double>(k));
+  lc.freeze(static_cast<double>(k) + 5.0);  // idempotent: the first time is kept
+  EXPECT_TRUE(lc.frozen());
+  EXPECT_EQ(lc.stats().frozen_at_s, static_cast<double>(k));
+  const std::size_t frames_before = mapper.submaps().back().frames;
+  for (; k < path.size(); ++k) step(k, static_cast<double>(k));
+  EXPECT_EQ(mapper.submaps().size(), submaps);
+  EXPECT_EQ(lc.stats().checks, checks);
+  EXPECT_EQ(lc.stats().closures, 0u);
+  // The open submap took every later observation.
+  EXPECT_EQ(mapper.submaps().back().frames, frames_before + (path.size() - path.size() / 2) * profile.sensors.size());
+}
+
 TEST(LoopClosure, BadSettingsAreNamed) {
   auto expect_bad = [](LoopClosureSettings s, const char* field) {
     try {

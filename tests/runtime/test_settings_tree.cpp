@@ -140,6 +140,14 @@ TEST(SettingsTree, OverlaysSetRuntimeSettingsAndNameTheirSource) {
   EXPECT_FALSE(p.runtime.loop_closure.enabled);
   EXPECT_EQ(p.runtime.explorer.stall_timeout_s, 2.0f);
   EXPECT_EQ(p.mapping.voxel_filter.leaf_size_m, 0.05f);  // untouched keys keep the profile's values
+  // Patrol and its spacing, by name and range.
+  const duet::Profile q = duet::resolve_profile(
+      "dual", std::vector{duet::set_overlay("exploration.on_done=patrol"), duet::set_overlay("exploration.patrol_spacing_m=2.5")});
+  EXPECT_EQ(q.runtime.explorer.on_done, duet::OnDone::kPatrol);
+  EXPECT_EQ(q.runtime.explorer.patrol_spacing_m, 2.5f);
+  const std::string spacing = error_of([&] { (void)duet::resolve_profile("dual", std::vector{duet::set_overlay("exploration.patrol_spacing_m=0.1")}); });
+  EXPECT_NE(spacing.find("patrol_spacing_m"), std::string::npos) << spacing;
+  EXPECT_NE(spacing.find("[0.5, 100]"), std::string::npos) << spacing;
   // A later overlay wins.
   EXPECT_EQ(duet::resolve_profile("dual", std::vector{duet::file_overlay(over), duet::set_overlay("runtime.execution=lockstep")})
                 .runtime.execution,

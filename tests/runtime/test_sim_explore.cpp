@@ -254,6 +254,50 @@ TEST(SimExplore, ReturnsHomeWhenDone) {
   EXPECT_LT(st.sim_time_s, sum.sim_time_s);
 }
 
+// exploration.on_done = patrol: once explored, the robot drives a round of waypoints along its
+// trail, lap after lap, until the time limit; the map is finished (the loop closer opens no
+// submap), and the health samples come every period.
+TEST(SimExplore, PatrolsAfterExploringWithAFinishedMap) {
+  duet::sim::ExploreSettings s = settings(1, 420.0);
+  s.runtime.explorer.on_done = duet::OnDone::kPatrol;
+  s.runtime.explorer.patrol_spacing_m = 1.5f;
+  s.health_period_s = 30.0;
+  duet::sim::SimExplore run(two_rooms(), duet::builtin_profile("dual_kinect_kobuki"), s);
+  run.run();
+  const auto sum = run.summary();
+  ASSERT_EQ(sum.stop_reason, duet::sim::StopReason::kTimeLimit) << sum.stop_detail;
+  EXPECT_EQ(sum.explorer_state, "patrolling");
+  EXPECT_NE(sum.stop_detail.find("explored:"), std::string::npos) << sum.stop_detail;
+  EXPECT_NE(sum.stop_detail.find("patrolling"), std::string::npos) << sum.stop_detail;
+  EXPECT_GE(sum.coverage, 0.95);
+  EXPECT_EQ(sum.collisions, 0u);
+  // Two rooms 6 m across at 1.5 m spacing: several waypoints, each reached at least once.
+  EXPECT_GE(sum.explorer.patrol_waypoints, 3);
+  EXPECT_GE(sum.explorer.patrol_laps, 1);
+  EXPECT_GE(sum.explorer.patrol_reached, sum.explorer.patrol_waypoints);
+  EXPECT_LE(sum.explorer.patrol_skipped, sum.explorer.patrol_reached / 4) << "most waypoints are reached";
+  // The map was finished when exploring ended: no submap opened after that.
+  ASSERT_TRUE(sum.loop_closure);
+  ASSERT_GE(sum.loops.frozen_at_s, 0.0);
+  const auto& h = run.health();
+  ASSERT_EQ(h.size(), 14u);  // every 30 s of 420 s
+  long frozen_submaps = -1;
+  for (std::size_t k = 0; k < h.size(); ++k) {
+    EXPECT_NEAR(h[k].t_s, 30.0 * static_cast<double>(k + 1), 1e-6);
+    EXPECT_GT(h[k].rss_mb, 10.0);  // Linux: /proc/self/statm
+    EXPECT_GT(h[k].tick_mean_ms, 0.0);
+    EXPECT_GE(h[k].tick_max_ms, h[k].tick_mean_ms);
+    EXPECT_GT(h[k].grid_cells, 0u);
+    ASSERT_GE(h[k].submaps, 1);
+    if (h[k].t_s > sum.loops.frozen_at_s + 1.0) {
+      if (frozen_submaps < 0) frozen_submaps = h[k].submaps;
+      EXPECT_EQ(h[k].submaps, frozen_submaps) << "at " << h[k].t_s << " s";
+      EXPECT_EQ(h[k].explorer_state, "patrolling");
+    }
+  }
+  EXPECT_GT(frozen_submaps, 0) << "the patrol lasted at least one health period";
+}
+
 // Each goal selection strategy alone explores the two rooms: the nearest frontier (Yamauchi) and
 // explore_lite's frontier cost without Procedure 1, and Procedure 1 with its frontier fallback.
 TEST(SimExplore, EachGoalStrategyAloneExploresTheRooms) {

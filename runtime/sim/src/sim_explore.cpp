@@ -2,6 +2,7 @@
 /// The simulated exploration run (see sim_explore.hpp).
 #include <duet/kernels/error.hpp>
 #include <duet/kernels/grid_view.hpp>
+#include <duet/runtime/robot/resources.hpp>
 #include <duet/sim/sim_explore.hpp>
 
 #include "seed_mix.hpp"
@@ -63,6 +64,8 @@ void validate(const ExploreSettings& s) {
     bad("curve_period_s must be in (0, 60] s, got " + std::to_string(s.curve_period_s));
   if (!(std::isfinite(s.coverage_resolution_m) && s.coverage_resolution_m > 0.0f && s.coverage_resolution_m <= 1.0f))
     bad("coverage_resolution_m must be in (0, 1] m, got " + std::to_string(s.coverage_resolution_m));
+  if (!(std::isfinite(s.health_period_s) && s.health_period_s >= 0.0 && s.health_period_s <= 3600.0))
+    bad("health_period_s must be in [0, 3600] s (0 = never), got " + std::to_string(s.health_period_s));
   validate(s.render);
   validate(runtime_settings(s));
 }
@@ -141,6 +144,7 @@ double SimExplore::occupied_on_obstacles() const {
 
 bool SimExplore::step() {
   if (reason_ != StopReason::kRunning) return false;
+  const double step_w0 = wall_.now_s();
   // 1-2. The chassis moves one control period (physics inside; odometry at 50 Hz); the sensors
   // render when due, from the true pose of that instant (SimRobot::advance).
   const double t_end = t_ + dt_;
@@ -156,7 +160,9 @@ bool SimExplore::step() {
   if (settings_.realtime) wall_.sleep_until(t_);
   // 3. The robot's runtime: synchronizer -> mapper -> explorer -> command.
   runtime_->override_pose(settings_.use_true_pose ? std::optional<Pose2>(chassis.true_pose()) : std::nullopt);
+  const double tick_w0 = wall_.now_s();
   runtime_->tick(t_);
+  const double tick_s = wall_.now_s() - tick_w0;
 
   // 4. Scoring.
   const Pose2 truth = chassis.true_pose();
@@ -178,7 +184,35 @@ bool SimExplore::step() {
   else if (t_ + 1e-9 >= settings_.max_time_s) reason_ = StopReason::kTimeLimit;
   if (reason_ != StopReason::kRunning) finish();
   wall_elapsed_ = wall_.now_s();
+  sample_health(tick_s, wall_elapsed_ - step_w0);
   return reason_ == StopReason::kRunning;
+}
+
+void SimExplore::sample_health(double tick_s, double step_s) {
+  if (settings_.health_period_s <= 0.0) return;
+  tick_sum_s_ += tick_s;
+  tick_max_s_ = std::max(tick_max_s_, tick_s);
+  step_sum_s_ += step_s;
+  ++health_periods_;
+  if (next_health_t_ <= 0.0) next_health_t_ = settings_.health_period_s;
+  if (t_ + 1e-9 < next_health_t_ && reason_ == StopReason::kRunning) return;
+  HealthSample h;
+  h.t_s = t_;
+  const std::int64_t rss = resident_memory_bytes();
+  h.rss_mb = rss < 0 ? -1.0 : static_cast<double>(rss) / (1024.0 * 1024.0);
+  const double n = static_cast<double>(health_periods_);
+  h.tick_mean_ms = 1e3 * tick_sum_s_ / n;
+  h.tick_max_ms = 1e3 * tick_max_s_;
+  h.step_mean_ms = 1e3 * step_sum_s_ / n;
+  const OccupancyGrid& g = runtime_->map_grid();
+  h.grid_cells = static_cast<std::size_t>(g.width()) * static_cast<std::size_t>(g.height());
+  if (settings_.runtime.execution == Execution::kLockstep || reason_ != StopReason::kRunning)
+    h.submaps = static_cast<long>(runtime_->mapper().submaps().size());
+  h.explorer_state = duet::to_string(runtime_->state());
+  health_.push_back(std::move(h));
+  tick_sum_s_ = tick_max_s_ = step_sum_s_ = 0.0;
+  health_periods_ = 0;
+  while (next_health_t_ <= t_ + 1e-9) next_health_t_ += settings_.health_period_s;
 }
 
 void SimExplore::apply_sim_faults() {

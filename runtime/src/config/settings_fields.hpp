@@ -22,7 +22,7 @@ template <class E>
 using Names = std::initializer_list<std::pair<const char*, E>>;
 
 inline constexpr Names<Execution> kExecutionNames = {{"lockstep", Execution::kLockstep}, {"background", Execution::kBackground}};
-inline constexpr Names<OnDone> kOnDoneNames = {{"stay", OnDone::kStay}, {"return_home", OnDone::kReturnHome}};
+inline constexpr Names<OnDone> kOnDoneNames = {{"stay", OnDone::kStay}, {"return_home", OnDone::kReturnHome}, {"patrol", OnDone::kPatrol}};
 inline constexpr Names<FrontierSelection> kSelectionNames = {{"nearest", FrontierSelection::kNearest},
                                                             {"explore_lite", FrontierSelection::kExploreLite}};
 inline constexpr Names<ObservationBackend> kBackendNames = {{"dda", ObservationBackend::kDda}, {"embree", ObservationBackend::kEmbree}};
@@ -126,6 +126,7 @@ void goal_fields(V& v, ExplorerSettings& s) {
   v("blacklist_ttl_s", s.blacklist_ttl_s);
   v("final_retries", s.final_retries);
   v.choice("on_done", s.on_done, kOnDoneNames);
+  v("patrol_spacing_m", s.patrol_spacing_m);
   v("stop_when_no_frontier", s.stop_when_no_frontier);
   v("goal_standoff_search_m", s.goal_standoff_search_m);
   v("squeeze_margin_m", s.squeeze_margin_m);

@@ -88,7 +88,7 @@ std::optional<Pose2> LoopCloser::update(Mapper& mapper, const Pose2& at, double 
     travel_m_ = 0.0f;
   }
   // 2. The query window: this update's obstacle points, one per cell (the first in order).
-  {
+  if (!frozen_) {
     const float res = mapper.grid().resolution();
     cells_scratch_.clear();
     for (const Eigen::Vector2f& p : mapper.last_obstacles())
@@ -100,9 +100,9 @@ std::optional<Pose2> LoopCloser::update(Mapper& mapper, const Pose2& at, double 
     ring_.push_back(std::move(scan));
     while (!ring_.empty() && ring_.front().t < t - settings_.query_window_s) ring_.pop_front();
   }
-  // 3. Loop search.
+  // 3. Loop search (none once the map is finished).
   std::optional<Pose2> shift;
-  if (t - last_check_t_ >= settings_.check_period_s) {
+  if (!frozen_ && t - last_check_t_ >= settings_.check_period_s) {
     last_check_t_ = t;
     Pose2 match;
     std::size_t old_node = 0;
@@ -124,9 +124,18 @@ std::optional<Pose2> LoopCloser::update(Mapper& mapper, const Pose2& at, double 
     }
   }
   // 4. A new submap after its time or travel (or after a closure, which closes the open one).
-  if (!shift && (t - opened_t_ >= settings_.submap_duration_s || travel_m_ >= settings_.submap_travel_m)) (void)mapper.open_submap();
+  if (!frozen_ && !shift && (t - opened_t_ >= settings_.submap_duration_s || travel_m_ >= settings_.submap_travel_m))
+    (void)mapper.open_submap();
   stats_.time_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return shift;
+}
+
+void LoopCloser::freeze(double t) {
+  if (frozen_) return;
+  frozen_ = true;
+  stats_.frozen_at_s = t;
+  pending_.reset();
+  ring_.clear();
 }
 
 bool LoopCloser::check(Mapper& mapper, const Pose2& at, double t, Pose2& match, std::size_t& old_node) {

@@ -75,8 +75,13 @@ void Mapper::integrate(const CameraPoints& points, std::span<const SensorFrame> 
   ++stats_.observations;
   if (keep_submaps_) {
     // The open submap's cloud is re-filtered as it grows (as the global cloud is without submaps).
+    // Each refilter leaves the voxels of the area covered; a submap that covers much (the one a
+    // finished map keeps open: LoopCloser::freeze()) waits until its cloud doubles again.
     Submap& sm = submaps_.back();
-    if (sm.cloud.size() > 400'000) refilter(sm.cloud);
+    if (sm.cloud.size() > std::max<std::size_t>(400'000, 2 * open_filtered_size_)) {
+      refilter(sm.cloud);
+      open_filtered_size_ = sm.cloud.size();
+    }
   } else if (pending_.size() > std::max<std::size_t>(global_.size(), 2'000'000)) {
     compact();
   }
@@ -95,6 +100,7 @@ std::size_t Mapper::open_submap() {
   Submap& last = submaps_.back();
   if (last.frames == 0) return submaps_.size() - 1;
   if (!last.cloud.empty()) refilter(last.cloud);
+  open_filtered_size_ = 0;
   submaps_.push_back(Submap{OccupancyGrid(settings_.grid_resolution_m), {}, {}, 0});
   return submaps_.size() - 1;
 }

@@ -11,17 +11,23 @@
 namespace duet {
 
 namespace {
-/// Calls fn(log-odds) for every cell of `g` whose centre is within r of p.
+/// Calls fn(index) for every cell of `g` whose centre is within r of p.
 template <class F>
-void for_each_cell_in_disc(OccupancyGrid& g, const Eigen::Vector2f& p, float r, F&& fn) {
+void for_each_index_in_disc(const OccupancyGrid& g, const Eigen::Vector2f& p, float r, F&& fn) {
   const int rc = static_cast<int>(std::ceil(r / g.resolution()));
   const Eigen::Vector2i c = g.cell_of(p);
   for (int dy = -rc; dy <= rc; ++dy)
     for (int dx = -rc; dx <= rc; ++dx) {
       const int x = c.x() + dx, y = c.y() + dy;
       if (!g.in_bounds(x, y) || (g.cell_center(x, y) - p).norm() > r) continue;
-      fn(g.logodds()[g.index(x, y)]);
+      fn(g.index(x, y));
     }
+}
+
+/// Calls fn(log-odds) for every cell of `g` whose centre is within r of p.
+template <class F>
+void for_each_cell_in_disc(OccupancyGrid& g, const Eigen::Vector2f& p, float r, F&& fn) {
+  for_each_index_in_disc(g, p, r, [&](std::size_t i) { fn(g.logodds()[i]); });
 }
 
 void shift_points(std::vector<Eigen::Vector2f>& points, const Pose2& D) {
@@ -80,17 +86,35 @@ void TrailLayer::add(const Eigen::Vector2f& p) {
 }
 
 void TrailLayer::apply(OccupancyGrid& grid) {
-  auto clear_disc = [&](const Eigen::Vector2f& p, float r) {
-    for_each_cell_in_disc(grid, p, r, [&](float& l) {
-      if (std::isnan(l)) l = free_;
+  // The cells under the trail are kept from one map to the next while the grid's geometry
+  // stays (cost per map: the cells, not the trail's length); a new geometry or a shift
+  // computes them again from every point.
+  const Geometry g{grid.origin().x(), grid.origin().y(), grid.width(), grid.height(), grid.resolution()};
+  if (!(g == geometry_)) {
+    geometry_ = g;
+    cells_.clear();
+    marked_.assign(static_cast<std::size_t>(grid.width()) * static_cast<std::size_t>(grid.height()), 0);
+    done_ = 0;
+  }
+  auto mark = [&](const Eigen::Vector2f& p, float r) {
+    for_each_index_in_disc(grid, p, r, [&](std::size_t i) {
+      if (marked_[i]) return;
+      marked_[i] = 1;
+      cells_.push_back(static_cast<std::uint32_t>(i));
     });
   };
   const float res = grid.resolution();
   const float body_cells_r = body_radius_m_ - 0.7072f * res;  // half a cell's diagonal
-  for (const Eigen::Vector2f& p : points_) clear_disc(p, body_cells_r);
-  if (!points_.empty()) clear_disc(points_.front(), start_radius_m_ + res);
+  if (done_ == 0 && !points_.empty()) mark(points_.front(), start_radius_m_ + res);
+  for (; done_ < points_.size(); ++done_) mark(points_[done_], body_cells_r);
+  float* l = grid.logodds().data();
+  for (const std::uint32_t i : cells_)
+    if (std::isnan(l[i])) l[i] = free_;
 }
 
-void TrailLayer::shift(const Pose2& D) { shift_points(points_, D); }
+void TrailLayer::shift(const Pose2& D) {
+  shift_points(points_, D);
+  geometry_ = {};  // the cells are computed again
+}
 
 }  // namespace duet

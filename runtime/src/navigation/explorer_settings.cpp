@@ -8,13 +8,21 @@
 
 namespace duet {
 
-const char* to_string(OnDone d) { return d == OnDone::kReturnHome ? "return_home" : "stay"; }
+const char* to_string(OnDone d) {
+  switch (d) {
+    case OnDone::kStay: return "stay";
+    case OnDone::kReturnHome: return "return_home";
+    case OnDone::kPatrol: return "patrol";
+  }
+  return "unknown";
+}
 
 const char* to_string(ExplorerState s) {
   switch (s) {
     case ExplorerState::kIdle: return "idle";
     case ExplorerState::kExploring: return "exploring";
     case ExplorerState::kReturningHome: return "returning_home";
+    case ExplorerState::kPatrolling: return "patrolling";
     case ExplorerState::kDone: return "done";
   }
   return "unknown";
@@ -62,6 +70,8 @@ void validate(const ExplorerSettings& s) {
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::slow_clearance_m must be in [0, 10] m (0 = off), got " + std::to_string(s.slow_clearance_m));
   if (!(std::isfinite(s.slow_speed_mps) && s.slow_speed_mps > 0.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::slow_speed_mps must be in (0, inf) m/s, got " + std::to_string(s.slow_speed_mps));
+  if (!(s.patrol_spacing_m >= 0.5f && s.patrol_spacing_m <= 100.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::patrol_spacing_m must be in [0.5, 100] m, got " + std::to_string(s.patrol_spacing_m));
   if (s.final_retries < 0 || s.final_retries > 1000)
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::final_retries must be in [0, 1000], got " + std::to_string(s.final_retries));
 }

@@ -119,6 +119,11 @@ void Navigator::goal_reached(std::uint64_t goal_id, double now_s) {
     stop_detail_ += "; returned home";
     return;
   }
+  if (state_ == ExplorerState::kPatrolling) {
+    drop_goal();
+    patrol_goal_ended(true);
+    return;
+  }
   ++stats_.goals_reached;
   if (GoalStrategy* by = active()) by->goal_ended(GoalEnd{true, now_s, goal_target_, decision_, blacklist_, stats_});
   drop_goal();
@@ -140,6 +145,7 @@ void Navigator::shift(const Pose2& D) {
   planning_costmap_.shift(D);
   local_costmap_.shift(D);
   for (const auto& st : strategies_) st->shift(D);
+  for (Eigen::Vector2f& p : patrol_) move(p);
   if (goal_) goal_ = compose(D, *goal_);
 }
 
@@ -258,6 +264,11 @@ void Navigator::abandon_goal(int& counter, double now_s) {
     drop_goal();
     return;
   }
+  if (state_ == ExplorerState::kPatrolling) {  // skipped for this lap
+    drop_goal();
+    patrol_goal_ended(false);
+    return;
+  }
   // The strategy it came from decides what is not tried again (for a while, or for good).
   if (GoalStrategy* by = goal_ ? active() : nullptr) by->goal_ended(GoalEnd{false, now_s, goal_target_, decision_, blacklist_, stats_});
   drop_goal();
@@ -276,6 +287,10 @@ void Navigator::decide(const Pose2& robot, double now_s) {
       state_ = ExplorerState::kDone;
       stop_detail_ += "; no path home";
     }
+    return;
+  }
+  if (state_ == ExplorerState::kPatrolling) {
+    next_patrol_goal(robot, now_s);
     return;
   }
   const auto start = std::chrono::steady_clock::now();
@@ -339,6 +354,10 @@ void Navigator::finish(const Pose2& robot, double now_s) {
     case ExplorationStatus::kRobotBlocked: stop_detail_ = "gave up: the robot is blocked (no traversable cell around it)"; break;
     default: stop_detail_ = std::string("stopped: ") + to_string(stop_status_); break;
   }
+  if (settings_.on_done == OnDone::kPatrol && !trail_->points().empty()) {
+    start_patrol(robot, now_s);
+    return;
+  }
   if (settings_.on_done != OnDone::kReturnHome || trail_->points().empty()) {
     state_ = ExplorerState::kDone;
     return;
@@ -357,20 +376,86 @@ bool Navigator::plan_home(const Pose2& robot, double now_s) {
   // the robot is), each at a later map update.
   constexpr int kHomeAttempts = 3;
   if (++home_attempts_ > kHomeAttempts) return false;
-  const Eigen::Vector2f home = trail_->points().front();
-  goal_ = Pose2{home.x(), home.y(), robot.theta};
-  goal_target_ = home;
+  if (!set_goal_to(trail_->points().front(), robot, now_s)) {
+    wait_for_map_ = true;  // try again on the next map
+    return home_attempts_ < kHomeAttempts;
+  }
+  return true;
+}
+
+bool Navigator::set_goal_to(const Eigen::Vector2f& target, const Pose2& robot, double now_s) {
+  goal_ = Pose2{target.x(), target.y(), robot.theta};
+  goal_target_ = target;
   active_ = kNone;
   if (!recheck_goal() || !plan(robot)) {
     drop_goal();
-    wait_for_map_ = true;  // try again on the next map
-    return home_attempts_ < kHomeAttempts;
+    return false;
   }
   float length = 0.0f;
   for (std::size_t i = 1; i < path_.size(); ++i) length += (path_[i] - path_[i - 1]).norm();
   goal_deadline_s_ = now_s + settings_.goal_timeout_s + length / settings_.nominal_speed_mps;
   ++goal_id_;
   return true;
+}
+
+void Navigator::start_patrol(const Pose2& robot, double now_s) {
+  // Waypoints along the trail, in the order the robot first came by them, each at least
+  // patrol_spacing_m from those kept before it.
+  const float spacing = settings_.patrol_spacing_m;
+  patrol_.clear();
+  for (const Eigen::Vector2f& p : trail_->points()) {
+    bool near = false;
+    for (const Eigen::Vector2f& w : patrol_)
+      if ((w - p).squaredNorm() < spacing * spacing) {
+        near = true;
+        break;
+      }
+    if (!near) patrol_.push_back(p);
+  }
+  // The round starts at the waypoint nearest the robot.
+  patrol_next_ = 0;
+  float best = std::numeric_limits<float>::infinity();
+  for (std::size_t k = 0; k < patrol_.size(); ++k) {
+    const float d = (patrol_[k] - Eigen::Vector2f(robot.x, robot.y)).squaredNorm();
+    if (d < best) {
+      best = d;
+      patrol_next_ = k;
+    }
+  }
+  patrol_misses_ = 0;
+  stats_.patrol_waypoints = static_cast<int>(patrol_.size());
+  stop_detail_ += "; patrolling " + std::to_string(patrol_.size()) + " waypoints";
+  state_ = ExplorerState::kPatrolling;
+  wait_for_map_ = false;
+  next_patrol_goal(robot, now_s);
+}
+
+void Navigator::next_patrol_goal(const Pose2& robot, double now_s) {
+  // At most a few paths per decision (a control period); the rest at later map updates.
+  constexpr int kTriesPerDecision = 3;
+  for (int k = 0; k < kTriesPerDecision && state_ == ExplorerState::kPatrolling; ++k) {
+    if (set_goal_to(patrol_[patrol_next_], robot, now_s)) return;
+    patrol_goal_ended(false);
+  }
+  if (state_ == ExplorerState::kPatrolling) wait_for_map_ = true;
+}
+
+void Navigator::patrol_goal_ended(bool reached) {
+  if (reached) {
+    ++stats_.patrol_reached;
+    patrol_misses_ = 0;
+  } else {
+    ++stats_.patrol_skipped;
+    ++patrol_misses_;
+  }
+  if (++patrol_next_ >= patrol_.size()) {
+    patrol_next_ = 0;
+    ++stats_.patrol_laps;
+  }
+  if (static_cast<std::size_t>(patrol_misses_) >= patrol_.size()) {
+    state_ = ExplorerState::kDone;
+    stop_detail_ += "; patrol ended: no waypoint reachable in a whole lap";
+  }
 }
 
 }  // namespace duet

@@ -237,6 +237,11 @@ std::optional<Pose2> ExplorationRuntime::map_update(MapInput& in) {
   }
   mapper_.integrate(camera_points_, frames, to_isometry(at));
   std::optional<Pose2> shift;
+  if (loop_ && !loop_->frozen()) {
+    // Exploration is over (patrolling, driving home, done): the map is finished.
+    const ExplorerState s = explorer_.navigator().state();
+    if (s != ExplorerState::kIdle && s != ExplorerState::kExploring) loop_->freeze(in.t_frames);
+  }
   if (loop_ && !in.override_pose) {
     // The map frame moved: so do the correction, the pose, and what the navigator keeps.
     shift = loop_->update(mapper_, at, in.t_frames);

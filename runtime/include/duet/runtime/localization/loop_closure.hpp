@@ -58,6 +58,7 @@ struct LoopClosureStats {
   double compose_time_s = 0.0;         ///< ... composing the old map and the query [s]
   double distance_time_s = 0.0;        ///< ... its distance field [s]
   double match_time_s = 0.0;           ///< ... the wide-window match [s]
+  double frozen_at_s = -1.0;           ///< when the map was finished (freeze()) [s]; -1: not frozen
 };
 
 /// One closure that moved the map (LoopCloser::events()).
@@ -80,6 +81,15 @@ class LoopCloser {
   /// anything the old map frame held is D * old; the robot's pose estimate must be moved by it),
   /// nullopt otherwise. The mapper must be the constructor's.
   std::optional<Pose2> update(Mapper& mapper, const Pose2& at, double t);
+
+  /// The map is finished (exploration is over): from now on no submap opens - the open one
+  /// takes every later observation, so the map keeps up with changes while its memory stays
+  /// bounded by the building's area - and no loop search runs (a closure would move that
+  /// submap, built over the whole patrol, as one rigid piece). The front end's scan-to-map
+  /// matching against the finished map keeps the pose, as in a SLAM system's localisation
+  /// mode. Idempotent; `t` is recorded (stats().frozen_at_s).
+  void freeze(double t);
+  [[nodiscard]] bool frozen() const noexcept { return frozen_; }
 
   [[nodiscard]] const LoopClosureStats& stats() const noexcept { return stats_; }
   /// Pose-graph nodes (one per submap: the robot's pose when it opened, as now estimated).
@@ -124,6 +134,7 @@ class LoopCloser {
   };
   std::vector<Extent> extents_;     ///< of the closed submaps, by index
   float last_score_ = 0.0f;
+  bool frozen_ = false;
 };
 
 }  // namespace duet

@@ -99,6 +99,7 @@ class Mapper {
   bool keep_submaps_ = false;
   std::vector<Submap> submaps_;
   bool cloud_dirty_ = false;  // submaps: global_ is out of date
+  std::size_t open_filtered_size_ = 0;  // submaps: the open submap's cloud after its last refilter
   // Reused scratch.
   CameraPoints camera_;
   std::vector<Eigen::Vector3f> map_points_;  ///< one frame's points in the map frame

@@ -13,7 +13,11 @@
 namespace duet {
 
 /// What the robot does once nothing reachable is left to explore (the paper: remain in place).
-enum class OnDone { kStay, kReturnHome };
+///  - kStay: stop where it is;
+///  - kReturnHome: drive back to where it started and stop there;
+///  - kPatrol: drive a round of waypoints along its own trail (patrol_spacing_m apart), lap
+///    after lap, until stopped (a guard robot; and the long-run test of issue 19).
+enum class OnDone { kStay, kReturnHome, kPatrol };
 [[nodiscard]] const char* to_string(OnDone d);
 
 struct ExplorerSettings {
@@ -25,6 +29,8 @@ struct ExplorerSettings {
   /// Once explored: stay where the robot is, or drive back to where it started (the first
   /// position of its trail) and stop there.
   OnDone on_done = OnDone::kStay;
+  /// Patrol waypoints: trail positions at least this far from each other [m], [0.5, 100].
+  float patrol_spacing_m = 3.0f;
   /// Exploration is complete when no reachable frontier is left, even if the partial map
   /// simulation still offers a goal: its reward (Eq. 5) never reaches zero, because known cells
   /// below the log-odds clamp keep gaining from re-observation, so R_g <= eps_R alone never
@@ -88,6 +94,7 @@ enum class ExplorerState {
   kIdle,           ///< no map yet
   kExploring,      ///< following a goal
   kReturningHome,  ///< explored; driving back to the start (OnDone::kReturnHome)
+  kPatrolling,     ///< explored; driving the patrol round (OnDone::kPatrol)
   kDone,           ///< stopped; see stop_status() and stop_detail()
 };
 [[nodiscard]] const char* to_string(ExplorerState s);
@@ -113,6 +120,10 @@ struct ExplorerStats {
   int stalls = 0;                   ///< stalls detected: contact obstacles placed
   int view_goals = 0;               ///< view goals taken
   int view_goals_reached = 0;       ///< of view_goals, those reached and looked from
+  int patrol_waypoints = 0;         ///< waypoints of the patrol round (OnDone::kPatrol)
+  int patrol_reached = 0;           ///< patrol waypoints reached
+  int patrol_skipped = 0;           ///< patrol waypoints given up (no path, time limit, stuck, blocked)
+  int patrol_laps = 0;              ///< patrol rounds completed
   /// Sum over map updates of the cells the recent obstacles made blocking.
   std::size_t recent_obstacle_cells = 0;
   double decision_time_sum_s = 0.0;

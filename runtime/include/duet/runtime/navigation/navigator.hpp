@@ -22,7 +22,11 @@
 ///    never looked at again;
 ///  - update_map() re-checks the goal (moved again or abandoned when blocked) and re-plans;
 ///  - exploration ends with the decision's status after final_retries decisions without a
-///    goal at later map updates.
+///    goal at later map updates; then, by ExplorerSettings::on_done, the robot stays, drives
+///    home, or patrols: waypoints picked along its own trail (every cell it drove through was
+///    free), visited in the order it first passed them, lap after lap; a waypoint that cannot
+///    be reached (no path, time limit, stuck, blocked) is skipped for this lap, and the patrol
+///    ends (kDone) only when a whole lap reaches none.
 ///
 /// Frames: map frame (the grid given to update_map()). Thread safety: not thread-safe (one
 /// thread at a time); the kernels run TBB-parallel in the caller's task arena, and the
@@ -163,6 +167,15 @@ class Navigator {
   void finish(const Pose2& robot, double now_s);
   /// A goal at the start position and a path to it; false if none.
   bool plan_home(const Pose2& robot, double now_s);
+  /// The patrol round from the trail (OnDone::kPatrol).
+  void start_patrol(const Pose2& robot, double now_s);
+  /// A goal at the next reachable patrol waypoint (skipping those with no path); kDone when a
+  /// whole lap has none.
+  void next_patrol_goal(const Pose2& robot, double now_s);
+  /// The current patrol goal ended: reached or skipped; on to the next waypoint.
+  void patrol_goal_ended(bool reached);
+  /// A goal at `target` (already in map frame), its path, its deadline; false without a path.
+  bool set_goal_to(const Eigen::Vector2f& target, const Pose2& robot, double now_s);
 
   Profile profile_;
   ExplorerSettings settings_;
@@ -196,6 +209,9 @@ class Navigator {
   LatencyStats decide_latency_;
   bool returning_ = false;       ///< driving home (OnDone::kReturnHome)
   int home_attempts_ = 0;        ///< paths home tried
+  std::vector<Eigen::Vector2f> patrol_;  ///< the patrol round (map frame)
+  std::size_t patrol_next_ = 0;  ///< the waypoint of the current / next patrol goal
+  int patrol_misses_ = 0;        ///< waypoints skipped in a row (a whole lap: the patrol ends)
   std::string stop_detail_;
 };
 

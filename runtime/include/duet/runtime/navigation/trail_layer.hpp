@@ -8,11 +8,14 @@
 ///    radius less half a cell's diagonal): an unseen obstacle corner at the body's edge must
 ///    stay an obstacle, or the trail creeps into it.
 ///  - At the first trail point, a disc of start_radius_m plus a cell.
-/// Only unknown cells change; known ones keep their value.
+/// Only unknown cells change; known ones keep their value. The trail grows with the distance
+/// driven (8 bytes per spacing_m); the cells it clears are cached per grid geometry.
 #include <duet/runtime/navigation/costmap_layer.hpp>
 
 #include <Eigen/Core>
 
+#include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace duet {
@@ -40,6 +43,18 @@ class TrailLayer final : public CostmapLayer {
   float free_;
   float spacing_m_;
   std::vector<Eigen::Vector2f> points_;
+  // The cells under the trail for one grid geometry (apply() on a patrol's unchanging grid
+  // costs the cells, not the trail's length).
+  struct Geometry {
+    float ox = 0.0f, oy = 0.0f;
+    int w = -1, h = -1;
+    float res = 0.0f;
+    bool operator==(const Geometry&) const = default;
+  };
+  Geometry geometry_;
+  std::vector<std::uint32_t> cells_;   ///< grid indices, each once
+  std::vector<std::uint8_t> marked_;   ///< per grid cell: in cells_
+  std::size_t done_ = 0;               ///< points_ already in cells_
 };
 
 }  // namespace duet

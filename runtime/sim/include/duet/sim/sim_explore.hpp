@@ -70,8 +70,23 @@ struct ExploreSettings {
   /// Faults injected into the run (faults.hpp: "camera_stop:1@60+10", ...): the stream faults
   /// between the simulated robot and the runtime, extrinsics and kidnap in the simulator.
   std::vector<std::string> faults;
+  /// The run's health (resident memory, per-cycle time, map size) sampled every this often
+  /// [s], [0, 3600]; 0 = never.
+  double health_period_s = 60.0;
 };
 void validate(const ExploreSettings& s);
+
+/// One health sample: the last health_period_s of the run.
+struct HealthSample {
+  double t_s = 0.0;               ///< simulated time at the end of the window [s]
+  double rss_mb = -1.0;           ///< resident memory [MiB] (-1: cannot be read here)
+  double tick_mean_ms = 0.0;      ///< the runtime's tick (wall time) over the window: mean [ms]
+  double tick_max_ms = 0.0;       ///< ... and max [ms]
+  double step_mean_ms = 0.0;      ///< the whole simulated period (physics, rendering, tick, scoring): mean [ms]
+  std::size_t grid_cells = 0;     ///< cells of the map grid
+  long submaps = -1;              ///< the mapper's submaps (-1: not readable while a background task runs)
+  std::string explorer_state;     ///< the explorer's state at the end of the window
+};
 
 struct CurvePoint {
   double t_s = 0.0;          ///< simulated time [s]
@@ -169,6 +184,8 @@ class SimExplore {
   [[nodiscard]] const std::vector<StampedPose>& estimated_trajectory() const noexcept { return est_traj_; }
   [[nodiscard]] const std::vector<StampedPose>& true_trajectory() const noexcept { return true_traj_; }
   [[nodiscard]] const std::vector<CollisionRecord>& collision_log() const noexcept { return collision_log_; }
+  /// The health samples so far (ExploreSettings::health_period_s).
+  [[nodiscard]] const std::vector<HealthSample>& health() const noexcept { return health_; }
   [[nodiscard]] Mapper& mapper() noexcept { return runtime_->mapper(); }
   [[nodiscard]] const Explorer& explorer() const noexcept { return runtime_->explorer(); }
   [[nodiscard]] const ExplorationRuntime& runtime() const noexcept { return *runtime_; }
@@ -180,6 +197,7 @@ class SimExplore {
  private:
   void finish();  ///< the run has stopped: drain the runtime, the last curve point
   void apply_sim_faults();  ///< extrinsics and kidnap at t_
+  void sample_health(double tick_s, double step_s);  ///< one period's times; a sample when due
   [[nodiscard]] RobotSource& source() { return injector_ ? static_cast<RobotSource&>(*injector_) : robot_; }
   [[nodiscard]] double occupied_on_obstacles() const;
 
@@ -207,6 +225,10 @@ class SimExplore {
   double target_entered_ = -1.0;
   double t90_ = -1.0, t_paper_ = -1.0;
   double wall_elapsed_ = 0.0;
+  std::vector<HealthSample> health_;
+  double next_health_t_ = 0.0;
+  double tick_sum_s_ = 0.0, tick_max_s_ = 0.0, step_sum_s_ = 0.0;
+  std::size_t health_periods_ = 0;
 };
 
 }  // namespace duet::sim
