@@ -3,6 +3,7 @@
 // its callback, setting exit_code.
 #include <duet/runtime/config/profile.hpp>
 #include <duet/runtime/robot/exploration_runtime.hpp>
+#include <duet/runtime/robot/faults.hpp>
 #include <duet/runtime/robot/robot_source.hpp>
 
 #include <CLI/CLI.hpp>
@@ -25,6 +26,12 @@ void add_run_command(CLI::App& app, int& exit_code);
 
 /// summary.json's timing of a run: the nominal control period and the latencies (p50/p99/max/mean, ms), late and missed periods.
 [[nodiscard]] nlohmann::json timing_json(const RuntimeTiming& timing);
+
+/// summary.json's "faults": each injected fault (faults.hpp) and how often it acted.
+[[nodiscard]] nlohmann::json faults_json(const std::vector<FaultCount>& faults);
+/// summary.json's "input": what the runtime's input guard did (input_guard.hpp) and its reactions.
+[[nodiscard]] nlohmann::json input_json(const InputStats& input, std::uint64_t sets_with_missing, std::uint64_t blind_holds,
+                                        std::size_t relocalizations);
 
 /// The robot sources `duet run` knows (robot_sources.cpp: one line each).
 [[nodiscard]] const RobotSourceRegistry& robot_sources();

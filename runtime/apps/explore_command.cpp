@@ -42,6 +42,28 @@ nlohmann::json timing_json(const RuntimeTiming& tm) {
           {"missed_periods", tm.missed_periods}};
 }
 
+nlohmann::json faults_json(const std::vector<FaultCount>& faults) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const auto& f : faults) j.push_back({{"spec", f.fault.spec}, {"kind", to_string(f.fault.kind)}, {"injected", f.injected}});
+  return j;
+}
+
+nlohmann::json input_json(const InputStats& in, std::uint64_t sets_with_missing, std::uint64_t blind_holds, std::size_t relocalizations) {
+  return {{"odometry_invalid", in.odometry_invalid},
+          {"odometry_out_of_order", in.odometry_out_of_order},
+          {"odometry_jumps_absorbed", in.odometry_jumps},
+          {"frames_invalid", in.frames_invalid},
+          {"frames_out_of_order", in.frames_out_of_order},
+          {"frames_empty", in.frames_empty},
+          {"frames_garbled", in.frames_garbled},
+          {"clock_restarts", in.clock_restarts},
+          {"sensor_silences", in.sensor_silences},
+          {"missing_frames_added", in.missing_frames},
+          {"sets_with_missing_frames", sets_with_missing},
+          {"blind_hold_periods", blind_holds},
+          {"relocalizations", relocalizations}};
+}
+
 namespace {
 
 struct ExploreOptions {

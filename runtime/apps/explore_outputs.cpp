@@ -75,23 +75,8 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                {"scan_matches", s.scan_matches},
                {"scan_match_rejected", s.scan_match_rejected},
                {"scan_match_time_s", s.scan_match_time_s}};
-  j["faults"] = nlohmann::json::array();
-  for (const auto& f : s.faults)
-    j["faults"].push_back({{"spec", f.fault.spec}, {"kind", to_string(f.fault.kind)}, {"injected", f.injected}});
-  const InputStats& in = s.input;
-  j["input"] = {{"odometry_invalid", in.odometry_invalid},
-                {"odometry_out_of_order", in.odometry_out_of_order},
-                {"odometry_jumps_absorbed", in.odometry_jumps},
-                {"frames_invalid", in.frames_invalid},
-                {"frames_out_of_order", in.frames_out_of_order},
-                {"frames_empty", in.frames_empty},
-                {"frames_garbled", in.frames_garbled},
-                {"clock_restarts", in.clock_restarts},
-                {"sensor_silences", in.sensor_silences},
-                {"missing_frames_added", in.missing_frames},
-                {"sets_with_missing_frames", s.sets_with_missing},
-                {"blind_hold_periods", s.blind_holds},
-                {"relocalizations", s.relocalizations}};
+  j["faults"] = faults_json(s.faults);
+  j["input"] = input_json(s.input, s.sets_with_missing, s.blind_holds, s.relocalizations);
   j["occupied_cells_on_obstacles"] = s.occupied_on_obstacles >= 0.0 ? nlohmann::json(s.occupied_on_obstacles) : nlohmann::json(nullptr);
   j["runtime"] = timing_json(s.timing);
   j["runtime"]["execution"] = to_string(s.execution);

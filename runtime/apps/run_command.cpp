@@ -1,6 +1,7 @@
 // `duet run`: the runtime on a robot source by name (robot_source.hpp) - the loop a robot runs,
 // with no ground truth and no scoring (`duet explore` scores the simulator's runs). Writes the
-// grid map, the cloud map and summary.json (the runtime's timing and why it stopped).
+// grid map, the cloud map and summary.json (the runtime's timing, why it stopped, the faults
+// injected and what the runtime's input guard did).
 #include "commands.hpp"
 #include "stop_signals.hpp"
 
@@ -8,6 +9,7 @@
 #include <duet/runtime/io/cloud_io.hpp>
 #include <duet/runtime/io/grid_io.hpp>
 #include <duet/runtime/io/output.hpp>
+#include <duet/runtime/robot/faults.hpp>
 #include <duet/runtime/robot/robot_loop.hpp>
 
 #include <nlohmann/json.hpp>
@@ -30,7 +32,22 @@ struct RunOptions {
   std::string out = "out/run";
   int threads = 0;
   bool quiet = false;
+  std::vector<std::string> faults;  // --fault, after the profile's faults:
 };
+
+/// The profile's faults and --fault: the stream faults only (extrinsics and kidnap move the
+/// simulated world: `duet explore` applies those).
+std::vector<Fault> stream_faults(const Profile& profile, const std::vector<std::string>& extra) {
+  std::vector<std::string> specs = profile.faults;
+  specs.insert(specs.end(), extra.begin(), extra.end());
+  std::vector<Fault> faults = parse_faults(specs, profile.sensors.size());
+  for (const Fault& f : faults)
+    if (f.kind == FaultKind::kExtrinsics || f.kind == FaultKind::kKidnap)
+      fail(ErrorCode::kInvalidArgument, "fault '" + f.spec + "': " + to_string(f.kind) +
+                                            " changes the simulated world itself; `duet run` injects only the stream faults "
+                                            "(use `duet explore --fault` for this one)");
+  return faults;
+}
 
 int run(const RunOptions& o) {
   Profile profile = resolve_profile(o.profile, overlays(o.configs, o.sets));
@@ -41,11 +58,15 @@ int run(const RunOptions& o) {
   validate(rs);
   const std::filesystem::path out(o.out);
   const StopSignals signals;  // SIGINT / SIGTERM from here on: stop the loop, save the maps so far, say so
+  const std::vector<Fault> faults = stream_faults(profile, o.faults);  // a bad fault is an error before the run
   prepare_output_dir(out);  // before the run, not after it
   int stopped_by = 0;
   tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
   arena.execute([&] {
-    std::unique_ptr<RobotSource> source = robot_sources().make(o.robot, profile, o.seed);
+    std::unique_ptr<RobotSource> robot = robot_sources().make(o.robot, profile, o.seed);
+    std::unique_ptr<FaultInjector> injector;
+    if (!faults.empty()) injector = std::make_unique<FaultInjector>(*robot, faults, o.seed ^ 0xFA017ull);
+    RobotSource* source = injector ? static_cast<RobotSource*>(injector.get()) : robot.get();
     ExplorationRuntime runtime(profile, source->chassis(), source->sensors());
     double next_print = 10.0;
     RobotRunResult r = run_robot(*source, runtime, rs, [&](double t) {
@@ -78,6 +99,8 @@ int run(const RunOptions& o) {
     j["runtime"]["execution"] = to_string(profile.runtime.execution);
     j["runtime"]["paced_by_wall_clock"] = o.realtime;
     j["interrupted"] = stopped_by != 0;
+    j["faults"] = faults_json(injector ? injector->counts() : std::vector<FaultCount>{});
+    j["input"] = input_json(r.stats.input, r.stats.sets_with_missing, r.stats.blind_holds, r.stats.relocalizations);
     write_text_file(out / "summary.json", j.dump(2) + "\n");
     if (!o.quiet || stopped_by)
       std::fprintf(stderr, "%s after %.1f s%s%s; wrote %s/{grid.yaml, grid.pgm, grid.png, cloud.pcd, summary.json}\n",
@@ -102,6 +125,10 @@ void add_run_command(CLI::App& app, int& exit_code) {
   cmd->add_option("-o,--out", o->out, "output folder")->capture_default_str();
   cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
+  cmd->add_option("--fault", o->faults,
+                  "inject a stream fault between the robot source and the runtime, KIND[:SENSOR]@START[+DURATION][=AMOUNT] "
+                  "(repeatable; added to the profile's faults; kinds: camera_stop, depth_zero, depth_noise, color_black, "
+                  "wheel_slip, odom_jump, stamp_disorder, stamp_duplicate, stamp_late, clock_back; see runtime/robot/faults.hpp)");
   cmd->callback([o, &exit_code] { exit_code = run(*o); });
 }
 

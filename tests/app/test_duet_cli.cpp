@@ -336,6 +336,31 @@ TEST(DuetCli, RunsTheLoopOnARobotSourceByName) {
   EXPECT_NE(missing.output.find("nope.yaml"), std::string::npos) << missing.output;
 }
 
+// `duet run --fault` (and a profile's faults:) injects the stream faults between the source and
+// the runtime and reports what they did and what the input guard did; the faults that move the
+// simulated world are refused with a pointer to `duet explore`.
+TEST(DuetCli, RunInjectsStreamFaultsAndRefusesWorldFaults) {
+  const fs::path dir = temp_dir("run_faults");
+  const fs::path world = write_file(dir, "room.yaml", kRoomWorld);
+  const CliRun r = run("run -q --robot sim:" + world.string() + " --max-time 20 --fault camera_stop:1@5+5 --fault stamp_duplicate:0@3+2" +
+                       " --set 'faults=[\"depth_noise:2@8+2\"]' --out " + (dir / "out").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto s = nlohmann::json::parse(std::ifstream(dir / "out" / "summary.json"));
+  ASSERT_EQ(s["faults"].size(), 3u) << s.dump();
+  EXPECT_EQ(s["faults"][0]["spec"], "depth_noise:2@8+2");  // the profile's first
+  EXPECT_EQ(s["faults"][1]["spec"], "camera_stop:1@5+5");
+  for (const auto& f : s["faults"]) EXPECT_GT(f["injected"].get<int>(), 0) << f.dump();
+  EXPECT_GT(s["input"]["odometry_out_of_order"].get<int>(), 0) << s["input"].dump();
+  EXPECT_GT(s["input"]["sensor_silences"].get<int>() + s["input"]["sets_with_missing_frames"].get<int>(), 0) << s["input"].dump();
+  EXPECT_GT(s["input"]["frames_garbled"].get<int>(), 0) << s["input"].dump();
+  for (const char* world_fault : {"kidnap@5", "extrinsics:1@0"}) {
+    const CliRun bad = run("run -q --robot sim:" + world.string() + " --max-time 5 --fault " + world_fault + " --out " + (dir / "bad").string());
+    EXPECT_NE(bad.code, 0) << world_fault;
+    EXPECT_NE(bad.output.find("duet explore --fault"), std::string::npos) << bad.output;
+    EXPECT_FALSE(fs::exists(dir / "bad" / "summary.json"));
+  }
+}
+
 namespace {
 
 /// Starts `duet ARGS...` (output to log), waits until `ready` exists (the output folder: the
