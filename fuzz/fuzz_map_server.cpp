@@ -20,7 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   try {
     const duet::sim::World world = duet::sim::world_from_map(yaml);
-    (void)duet::sim::rasterize(world, 0.1f);
+    (void)duet::sim::rasterize(world, duet::fuzz::raster_resolution(world.floor.min, world.floor.max));
     duet::fuzz::accepted("map_server grid and world");
   } catch (const duet::Error& e) {
     duet::fuzz::refused(e);

@@ -8,11 +8,14 @@
 /// crash, a sanitizer report, another exception, a hang) is a finding.
 #include <duet/kernels/error.hpp>
 
+#include <Eigen/Core>
+
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -74,6 +77,15 @@ inline std::vector<std::string_view> split_parts(const std::uint8_t* data, std::
   out.push_back(rest);
   out.resize(parts);
   return out;
+}
+
+/// The scoring raster's resolution for a fuzzed world: 0.1 m, or coarser so that the raster
+/// has at most 2^20 cells. rasterize() allows 2^28 (a unit test covers that limit); a fuzzer
+/// soon finds floors near it, and zeroing 256 MiB per input would take most of the run.
+inline float raster_resolution(const Eigen::Vector2f& floor_min, const Eigen::Vector2f& floor_max) {
+  const double area = static_cast<double>(floor_max.x() - floor_min.x()) * static_cast<double>(floor_max.y() - floor_min.y());
+  const double r = std::sqrt(std::max(area, 0.0) / static_cast<double>(1u << 20));
+  return std::isfinite(r) ? std::max(0.1f, static_cast<float>(r)) : 0.1f;
 }
 
 /// With DUET_FUZZ_VERBOSE set (the replay of a corpus), says whether each input was read or

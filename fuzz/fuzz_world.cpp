@@ -11,7 +11,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   duet::fuzz::put("map.pgm", parts[1]);
   try {
     const duet::sim::World world = duet::sim::load_world(path);
-    (void)duet::sim::rasterize(world, 0.1f);
+    (void)duet::sim::rasterize(world, duet::fuzz::raster_resolution(world.floor.min, world.floor.max));
     duet::fuzz::accepted("world");
   } catch (const duet::Error& e) {
     duet::fuzz::refused(e);

@@ -231,6 +231,12 @@ TEST(LoopClosure, FrozenMapOpensNoSubmapAndSearchesNoLoop) {
   EXPECT_EQ(lc.stats().frozen_at_s, -1.0);
   lc.freeze(static_cast<double>(k));
   lc.freeze(static_cast<double>(k) + 5.0);  // idempotent: the first time is kept
+  mapper.freeze_cloud();
+  mapper.freeze_cloud();
+  EXPECT_TRUE(mapper.cloud_frozen());
+  const std::size_t open_cloud = mapper.submaps().back().cloud.size();
+  const std::size_t cloud = mapper.cloud().size();
+  const OccupancyGrid grid_before = mapper.grid();
   EXPECT_TRUE(lc.frozen());
   EXPECT_EQ(lc.stats().frozen_at_s, static_cast<double>(k));
   const std::size_t frames_before = mapper.submaps().back().frames;
@@ -238,8 +244,21 @@ TEST(LoopClosure, FrozenMapOpensNoSubmapAndSearchesNoLoop) {
   EXPECT_EQ(mapper.submaps().size(), submaps);
   EXPECT_EQ(lc.stats().checks, checks);
   EXPECT_EQ(lc.stats().closures, 0u);
-  // The open submap took every later observation.
+  // The open submap took every later observation into its grid; the cloud stayed as it was.
   EXPECT_EQ(mapper.submaps().back().frames, frames_before + (path.size() - path.size() / 2) * profile.sensors.size());
+  EXPECT_EQ(mapper.submaps().back().cloud.size(), open_cloud);
+  EXPECT_EQ(mapper.cloud().size(), cloud);
+  const OccupancyGrid& after = mapper.grid();
+  std::size_t changed = 0;
+  if (after.width() == grid_before.width() && after.height() == grid_before.height()) {
+    for (std::size_t i = 0; i < after.logodds().size(); ++i) {
+      const float a = after.logodds()[i], b = grid_before.logodds()[i];
+      changed += !((std::isnan(a) && std::isnan(b)) || a == b);
+    }
+  } else {
+    changed = 1;  // the grid grew
+  }
+  EXPECT_GT(changed, 100u) << "the grid keeps taking observations";
 }
 
 TEST(LoopClosure, BadSettingsAreNamed) {

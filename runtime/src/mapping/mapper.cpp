@@ -64,10 +64,12 @@ void Mapper::integrate(const CameraPoints& points, std::span<const SensorFrame> 
     if (keep_submaps_) {
       Submap& sm = submaps_.back();
       update_grid(sm.grid, origin.head<2>(), filtered_.points_view(), labels_, settings_.grid_update, grid_ws_);
-      sm.cloud.append(filtered_);
+      if (!cloud_frozen_) {
+        sm.cloud.append(filtered_);
+        cloud_dirty_ = true;
+      }
       ++sm.frames;
-      cloud_dirty_ = true;
-    } else {
+    } else if (!cloud_frozen_) {
       pending_.append(filtered_);
     }
     ++stats_.frames;
@@ -83,6 +85,17 @@ void Mapper::integrate(const CameraPoints& points, std::span<const SensorFrame> 
       open_filtered_size_ = sm.cloud.size();
     }
   } else if (pending_.size() > std::max<std::size_t>(global_.size(), 2'000'000)) {
+    compact();
+  }
+}
+
+void Mapper::freeze_cloud() {
+  if (cloud_frozen_) return;
+  cloud_frozen_ = true;
+  if (keep_submaps_) {
+    Submap& sm = submaps_.back();
+    if (!sm.cloud.empty()) refilter(sm.cloud);  // and its growth's slack released
+  } else {
     compact();
   }
 }

@@ -237,10 +237,14 @@ std::optional<Pose2> ExplorationRuntime::map_update(MapInput& in) {
   }
   mapper_.integrate(camera_points_, frames, to_isometry(at));
   std::optional<Pose2> shift;
-  if (loop_ && !loop_->frozen()) {
-    // Exploration is over (patrolling, driving home, done): the map is finished.
+  if (!mapper_.cloud_frozen()) {
+    // Exploration is over (patrolling, driving home, done): the map is finished - the grid
+    // keeps up with what the sensors see, the cloud and the submaps stay as explored.
     const ExplorerState s = explorer_.navigator().state();
-    if (s != ExplorerState::kIdle && s != ExplorerState::kExploring) loop_->freeze(in.t_frames);
+    if (s != ExplorerState::kIdle && s != ExplorerState::kExploring) {
+      mapper_.freeze_cloud();
+      if (loop_) loop_->freeze(in.t_frames);
+    }
   }
   if (loop_ && !in.override_pose) {
     // The map frame moved: so do the correction, the pose, and what the navigator keeps.

@@ -82,8 +82,9 @@ class LoopCloser {
   /// nullopt otherwise. The mapper must be the constructor's.
   std::optional<Pose2> update(Mapper& mapper, const Pose2& at, double t);
 
-  /// The map is finished (exploration is over): from now on no submap opens - the open one
-  /// takes every later observation, so the map keeps up with changes while its memory stays
+  /// The map is finished (exploration is over; the runtime also freezes the mapper's cloud,
+  /// Mapper::freeze_cloud()): from now on no submap opens - the open one takes every later
+  /// observation into its grid, so the map keeps up with changes while its memory stays
   /// bounded by the building's area - and no loop search runs (a closure would move that
   /// submap, built over the whole patrol, as one rigid piece). The front end's scan-to-map
   /// matching against the finished map keeps the pose, as in a SLAM system's localisation

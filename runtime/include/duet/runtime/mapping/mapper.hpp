@@ -69,6 +69,13 @@ class Mapper {
   [[nodiscard]] const MappingSettings& settings() const noexcept { return settings_; }
   [[nodiscard]] const Eigen::Isometry3f& T_map_world() const noexcept { return T_map_world_; }
 
+  /// The cloud map is finished (exploration is over): from now on integrate() updates the grid
+  /// (and the open submap's grid) but adds no point to the cloud, so a robot that goes on
+  /// driving (patrolling) keeps its navigation map up to date while the cloud - which grows
+  /// with every observation until it is filtered - stays as explored. Idempotent.
+  void freeze_cloud();
+  [[nodiscard]] bool cloud_frozen() const noexcept { return cloud_frozen_; }
+
   /// Submaps (loop closure): from now on every integrate() also goes into the open submap (the
   /// last of submaps()), and the global cloud is kept per submap instead. Call before the first
   /// integrate(); throws duet::Error(kInvalidArgument) after it. The grid and the cloud are
@@ -99,6 +106,7 @@ class Mapper {
   bool keep_submaps_ = false;
   std::vector<Submap> submaps_;
   bool cloud_dirty_ = false;  // submaps: global_ is out of date
+  bool cloud_frozen_ = false;
   std::size_t open_filtered_size_ = 0;  // submaps: the open submap's cloud after its last refilter
   // Reused scratch.
   CameraPoints camera_;
