@@ -332,10 +332,7 @@ void Navigator::decide(const Pose2& robot, double now_s) {
     else if (proposal->kind == GoalKind::kSimulated) ++stats_.simulated_goals;
     else ++stats_.frontier_goals;
     no_goal_decisions_ = 0;
-    float length = 0.0f;
-    for (std::size_t i = 1; i < path_.size(); ++i) length += (path_[i] - path_[i - 1]).norm();
-    goal_deadline_s_ = now_s + settings_.goal_timeout_s + length / settings_.nominal_speed_mps;
-    ++goal_id_;  // the controller starts afresh on a new goal
+    start_goal(now_s);
   }
 }
 
@@ -391,11 +388,15 @@ bool Navigator::set_goal_to(const Eigen::Vector2f& target, const Pose2& robot, d
     drop_goal();
     return false;
   }
+  start_goal(now_s);
+  return true;
+}
+
+void Navigator::start_goal(double now_s) {
   float length = 0.0f;
   for (std::size_t i = 1; i < path_.size(); ++i) length += (path_[i] - path_[i - 1]).norm();
   goal_deadline_s_ = now_s + settings_.goal_timeout_s + length / settings_.nominal_speed_mps;
-  ++goal_id_;
-  return true;
+  ++goal_id_;  // the controller starts afresh on a new goal
 }
 
 void Navigator::start_patrol(const Pose2& robot, double now_s) {

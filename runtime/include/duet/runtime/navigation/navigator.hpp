@@ -174,6 +174,9 @@ class Navigator {
   void next_patrol_goal(const Pose2& robot, double now_s);
   /// The current patrol goal ended: reached or skipped; on to the next waypoint.
   void patrol_goal_ended(bool reached);
+  /// The goal and its path are set: its deadline (the time limit plus the path at the nominal
+  /// speed) and a new goal id.
+  void start_goal(double now_s);
   /// A goal at `target` (already in map frame), its path, its deadline; false without a path.
   bool set_goal_to(const Eigen::Vector2f& target, const Pose2& robot, double now_s);
 
