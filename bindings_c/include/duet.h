@@ -989,4 +989,8 @@ DUET_API void duet_planner_dwa_reset(duet_planner planner);
 } /* extern "C" */
 #endif
 
+/* The robot loop (duet_runtime.h) and the simulator (duet_sim.h). */
+#include "duet_runtime.h"
+#include "duet_sim.h"
+
 #endif /* DUET_H */

@@ -45,7 +45,7 @@
 
 namespace duet::capi {
 
-enum class Kind : std::uint8_t { kDevice = 1, kCloud = 2, kGrid = 3, kPlanner = 4 };
+enum class Kind : std::uint8_t { kDevice = 1, kCloud = 2, kGrid = 3, kPlanner = 4, kRuntime = 5, kSim = 6 };
 
 [[nodiscard]] const char* kind_name(Kind kind) noexcept;
 

@@ -147,6 +147,8 @@ const char* kind_name(Kind kind) noexcept {
     case Kind::kCloud: return "duet_cloud";
     case Kind::kGrid: return "duet_grid";
     case Kind::kPlanner: return "duet_planner";
+    case Kind::kRuntime: return "duet_runtime";
+    case Kind::kSim: return "duet_sim";
   }
   return "unknown handle";
 }

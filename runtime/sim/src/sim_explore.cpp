@@ -5,7 +5,7 @@
 #include <duet/runtime/robot/resources.hpp>
 #include <duet/sim/sim_explore.hpp>
 
-#include "seed_mix.hpp"
+#include <duet/runtime/config/seed_mix.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -16,11 +16,6 @@ namespace duet::sim {
 namespace {
 
 constexpr double kPaperAreaM2 = 31.0;  // paper §4.2, Fig. 10: dual sensors, 31.0 m^2 in 196 s
-
-Profile seeded(Profile p, std::uint64_t seed) {
-  p.exploration.strategy.simulation.seed = mix(seed ^ 0x5EED5EEDull);
-  return p;
-}
 
 double sensor_rate(const ExploreSettings& s) { return s.sensor_rate_hz > 0.0 ? s.sensor_rate_hz : s.runtime.map_rate_hz; }
 
@@ -75,7 +70,7 @@ SimExplore::SimExplore(World world, Profile profile, ExploreSettings settings)
         validate(world, world.source.empty() ? "world" : world.source);
         return std::make_shared<const World>(std::move(world));
       }()),
-      profile_(seeded(std::move(profile), settings.seed)),
+      profile_(with_run_seed(std::move(profile), settings.seed)),
       settings_((validate(settings), settings)),
       robot_((validate(profile_, profile_.name), world_), profile_, robot_settings(settings_)) {
   if (!settings_.faults.empty()) {
@@ -95,24 +90,33 @@ SimExplore::SimExplore(World world, Profile profile, ExploreSettings settings)
 
 SimExplore::~SimExplore() = default;
 
-CurvePoint SimExplore::measure() const {
-  CurvePoint p;
-  p.t_s = t_;
-  const OccupancyGrid& g = runtime_->map_grid();
-  const CellThresholds& th = profile_.exploration.cells;
+CoverageMeasure measure_coverage(const OccupancyGrid& g, const CellThresholds& th, const TruthGrid& truth,
+                                 std::span<const std::uint8_t> reachable) {
+  CoverageMeasure m;
   std::size_t known = 0;
   for (const float l : g.logodds())
     if (classify(l, th) != CellState::kUnknown) ++known;
-  p.area_m2 = static_cast<double>(known) * g.resolution() * g.resolution();
-  std::size_t covered = 0;
-  for (int y = 0; y < truth_.height; ++y)
-    for (int x = 0; x < truth_.width; ++x) {
-      if (!reachable_[static_cast<std::size_t>(y) * truth_.width + x]) continue;
-      const Eigen::Vector2f c = truth_.origin + Eigen::Vector2f((x + 0.5f) * truth_.resolution_m, (y + 0.5f) * truth_.resolution_m);
+  m.area_m2 = static_cast<double>(known) * g.resolution() * g.resolution();
+  std::size_t covered = 0, count = 0;
+  for (int y = 0; y < truth.height; ++y)
+    for (int x = 0; x < truth.width; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * truth.width + x;
+      if (i >= reachable.size() || !reachable[i]) continue;
+      ++count;
+      const Eigen::Vector2f c = truth.origin + Eigen::Vector2f((x + 0.5f) * truth.resolution_m, (y + 0.5f) * truth.resolution_m);
       const Eigen::Vector2i cell = g.cell_of(c);
       if (g.in_bounds(cell.x(), cell.y()) && classify(g.at(cell.x(), cell.y()), th) != CellState::kUnknown) ++covered;
     }
-  p.coverage = reachable_count_ ? static_cast<double>(covered) / static_cast<double>(reachable_count_) : 0.0;
+  m.coverage = count ? static_cast<double>(covered) / static_cast<double>(count) : 0.0;
+  return m;
+}
+
+CurvePoint SimExplore::measure() const {
+  CurvePoint p;
+  p.t_s = t_;
+  const CoverageMeasure m = measure_coverage(runtime_->map_grid(), profile_.exploration.cells, truth_, reachable_);
+  p.area_m2 = m.area_m2;
+  p.coverage = m.coverage;
   return p;
 }
 

@@ -3,7 +3,7 @@
 #include <duet/kernels/error.hpp>
 #include <duet/sim/sim_robot.hpp>
 
-#include "seed_mix.hpp"
+#include <duet/runtime/config/seed_mix.hpp>
 
 #include <algorithm>
 #include <cmath>

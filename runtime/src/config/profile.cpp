@@ -7,6 +7,7 @@
 /// the key it came from.
 #include <duet/kernels/error.hpp>
 #include <duet/runtime/config/profile.hpp>
+#include <duet/runtime/config/seed_mix.hpp>
 #include <duet/runtime/io/input_limits.hpp>
 #include <duet/runtime/robot/faults.hpp>
 
@@ -313,6 +314,11 @@ std::string_view builtin_profile_text(std::string_view name) {
 Profile builtin_profile(std::string_view name) {
   const std::string_view text = builtin_profile_text(name);
   return parse_profile(text, "<builtin " + std::string(canonical_builtin_name(name)) + ".yaml>");
+}
+
+Profile with_run_seed(Profile profile, std::uint64_t run_seed) {
+  profile.exploration.strategy.simulation.seed = mix(run_seed ^ 0x5EED5EEDull);
+  return profile;
 }
 
 Profile resolve_profile(std::string_view name_or_path, std::span<const ProfileOverlay> overlays) {

@@ -274,6 +274,31 @@ void Navigator::abandon_goal(int& counter, double now_s) {
   drop_goal();
 }
 
+void Navigator::return_home(const Pose2& robot, double now_s) {
+  if (state_ == ExplorerState::kDone || returning_) return;
+  drop_goal();
+  stop_detail_ = "the operator asked to return home";
+  if (trail_->points().empty()) {
+    state_ = ExplorerState::kDone;
+    stop_detail_ += "; no trail yet: the robot is home";
+    return;
+  }
+  returning_ = true;
+  state_ = ExplorerState::kReturningHome;
+  wait_for_map_ = false;
+  home_attempts_ = 0;
+  if (!plan_home(robot, now_s)) {
+    state_ = ExplorerState::kDone;
+    stop_detail_ += "; no path home";
+  }
+}
+
+void Navigator::stop(const std::string& why) {
+  drop_goal();
+  state_ = ExplorerState::kDone;
+  stop_detail_ = why;
+}
+
 void Navigator::drop_goal() {
   goal_.reset();
   active_ = kNone;

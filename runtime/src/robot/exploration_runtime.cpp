@@ -54,11 +54,13 @@ void validate(const RuntimeSettings& s) {
 
 /// One controller -> navigator event (kBackground).
 struct ExplorationRuntime::Event {
-  enum class Kind { kTrail, kStall, kReached, kAbandon } kind = Kind::kTrail;
+  enum class Kind { kTrail, kStall, kReached, kAbandon, kReturnHome, kStop } kind = Kind::kTrail;
   Eigen::Vector2f xy{0.0f, 0.0f};
   std::uint64_t goal_id = 0;
   AbandonReason why = AbandonReason::kTimeout;
   double t_s = 0.0;
+  Pose2 robot{};     ///< kReturnHome: the pose estimate when asked
+  std::string text;  ///< kStop: why
 };
 
 /// What a map update needs, taken on the control thread.
@@ -123,6 +125,12 @@ class ExplorationRuntime::Link final : public GoalLink {
   }
   /// A map update that started after the stall was posted has been taken: the navigator knows.
   void map_seen() { stall_pending_ = false; }
+  /// An operator's request: the current goal is no longer followed; the navigator hears of it
+  /// at the start of its next task.
+  void request(Event e) {
+    if (rt_.plan_ && rt_.plan_->goal) dropped_goal_id_ = std::max(dropped_goal_id_, rt_.plan_->goal_id);
+    post(std::move(e));
+  }
 
  private:
   void post(const Event& e) {
@@ -163,7 +171,20 @@ ExplorationRuntime::~ExplorationRuntime() { worker_.reset(); }  // before the me
 
 ExplorerState ExplorationRuntime::state() const {
   if (!worker_) return explorer_.state();
+  if (stop_asked_) return ExplorerState::kDone;
   return plan_ ? plan_->state : ExplorerState::kIdle;
+}
+
+std::optional<Pose2> ExplorationRuntime::goal() const {
+  if (!worker_) return explorer_.goal();
+  if (stop_asked_ || !plan_) return std::nullopt;
+  return plan_->goal;
+}
+
+std::span<const Eigen::Vector2f> ExplorationRuntime::path() const {
+  if (!worker_) return explorer_.path();
+  if (stop_asked_ || !plan_) return {};
+  return plan_->path;
 }
 
 ExplorationStatus ExplorationRuntime::stop_status() const {
@@ -173,7 +194,34 @@ ExplorationStatus ExplorationRuntime::stop_status() const {
 
 std::string ExplorationRuntime::stop_detail() const {
   if (!worker_) return explorer_.stop_detail();
+  if (stop_asked_ && !(plan_ && plan_->state == ExplorerState::kDone)) return stop_why_;
   return plan_ ? plan_->stop_detail : std::string();
+}
+
+void ExplorationRuntime::return_home(double now_s) {
+  if (!worker_) {
+    explorer_.navigator().return_home(pose_, now_s);
+    return;
+  }
+  Event e;
+  e.kind = Event::Kind::kReturnHome;
+  e.robot = pose_;
+  e.t_s = now_s;
+  link_->request(std::move(e));
+  submit_decision(pose_, now_s);  // a task that hears of it now (or the next map update, if one is in flight)
+}
+
+void ExplorationRuntime::stop(const std::string& why) {
+  if (!worker_) {
+    explorer_.navigator().stop(why);
+    return;
+  }
+  stop_asked_ = true;
+  stop_why_ = why;
+  Event e;
+  e.kind = Event::Kind::kStop;
+  e.text = why;
+  link_->request(std::move(e));
 }
 
 ExplorerStats ExplorationRuntime::explorer_stats() const {
@@ -357,6 +405,8 @@ void ExplorationRuntime::apply_events() {
       case Event::Kind::kStall: nav.stall(e.xy, e.t_s); break;
       case Event::Kind::kReached: nav.goal_reached(e.goal_id, e.t_s); break;
       case Event::Kind::kAbandon: nav.abandon(e.goal_id, e.why, e.t_s); break;
+      case Event::Kind::kReturnHome: nav.return_home(e.robot, e.t_s); break;
+      case Event::Kind::kStop: nav.stop(e.text); break;
     }
   }
 }
@@ -460,6 +510,7 @@ void ExplorationRuntime::tick(double now_s) {
     blind_ = blind;
   }
   last_cmd_ = worker_ ? explorer_.controller().control(pose_, odom_twist_, now_s, *link_) : explorer_.control(pose_, odom_twist_, now_s);
+  if (stop_asked_) last_cmd_ = Twist{0.0f, 0.0f};  // kBackground: until the navigator has heard
   if (blind) {
     last_cmd_ = Twist{0.0f, 0.0f};
     ++stats_.blind_holds;

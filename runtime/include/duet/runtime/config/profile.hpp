@@ -205,6 +205,11 @@ struct ProfileOverlay {
 /// load_profile(); anything else is a built-in profile name.
 [[nodiscard]] Profile resolve_profile(std::string_view name_or_path, std::span<const ProfileOverlay> overlays = {});
 
+/// The profile with Procedure 1's random simulation seeded from a run's seed, as `duet explore
+/// --seed` does (exploration.strategy.simulation.seed = mix(run_seed ^ 0x5EED5EED)): the same
+/// run seed gives the same decisions in the simulator, the C API and `duet run`.
+[[nodiscard]] Profile with_run_seed(Profile profile, std::uint64_t run_seed);
+
 /// Range checks of the profile's structs (the kernels' settings have their own validate()):
 /// each throws duet::Error(kInvalidArgument) "Struct.field must be in RANGE, got V".
 void validate(const ChassisProfile& chassis);

@@ -119,6 +119,14 @@ class Navigator {
   /// A stall: a contact obstacle at `contact` (map frame); abandons the goal; no decision before the next map.
   void stall(const Eigen::Vector2f& contact, double now_s);
 
+  // Requests of the robot's operator (the C API's duet_runtime_return_home / _stop).
+  /// Stop exploring (or patrolling) and drive back to the start through the normal goal
+  /// machinery; stop_detail() says the operator asked. kDone at once when there is no trail yet
+  /// or no path home after the usual attempts. No effect when already done or returning.
+  void return_home(const Pose2& robot, double now_s);
+  /// Stop now: the goal is dropped and the state becomes kDone, stop_detail() = `why`.
+  void stop(const std::string& why);
+
   /// The map frame moved (loop closure): goal, path, trail, contacts, recent obstacles, view target move by D.
   void shift(const Pose2& D);
 

@@ -107,6 +107,14 @@ class ExplorationRuntime {
   /// tests, not for the control thread). kLockstep: nothing to wait for.
   void drain();
 
+  /// The operator's requests (control thread, between ticks). return_home(): stop exploring
+  /// and drive back to the start (Navigator::return_home). stop(): the explorer is done now,
+  /// the robot holds still; stop_detail() = `why`. In kBackground the navigator hears of them at
+  /// the start of its next task (a decision submitted now, or the map update in flight); the
+  /// controller stops following the old goal at once.
+  void return_home(double now_s);
+  void stop(const std::string& why);
+
   /// DEBUGGING ONLY: map and plan with this pose instead of the odometry (nullopt: odometry).
   void override_pose(const std::optional<Pose2>& pose) { pose_override_ = pose; }
 
@@ -117,6 +125,12 @@ class ExplorationRuntime {
   /// The estimated drift rate of the odometry's heading [rad/s].
   [[nodiscard]] float heading_rate() const noexcept { return heading_rate_; }
   [[nodiscard]] const Twist& last_command() const noexcept { return last_cmd_; }
+  /// The goal the controller follows and its path (map frame; none / empty without a goal).
+  /// Safe on the control thread in both executions.
+  [[nodiscard]] std::optional<Pose2> goal() const;
+  [[nodiscard]] std::span<const Eigen::Vector2f> path() const;
+  /// True while the robot holds still because no frame has been mapped for too long.
+  [[nodiscard]] bool blind() const noexcept { return blind_; }
   [[nodiscard]] ExplorerState state() const;
   [[nodiscard]] ExplorationStatus stop_status() const;
   [[nodiscard]] std::string stop_detail() const;
@@ -186,6 +200,8 @@ class ExplorationRuntime {
   Twist odom_twist_;
   Twist last_cmd_;
   std::optional<Pose2> pose_override_;
+  bool stop_asked_ = false;     ///< kBackground: stop() was called (the navigator may not know yet)
+  std::string stop_why_;
   RuntimeStats stats_;
   LatencyStats period_, command_, decision_latency_;
   LatencyStats frame_to_map_;   ///< added by map_update() in kLockstep, by take_results() in kBackground

@@ -43,6 +43,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -146,6 +147,16 @@ struct ExploreSummary {
   std::size_t relocalizations = 0;       ///< wide re-matches that moved the pose
   double occupied_on_obstacles = -1.0;   ///< share of the grid's occupied cells within 0.1 m of a true obstacle (-1: none occupied)
 };
+
+/// What a grid knows of a world: the known (free or occupied, by `cells`) area [m^2], and the
+/// share of the `reachable` cells of `truth` (reachable_free_mask) it knows, [0, 1] (0 when
+/// none is reachable). The grid's frame is the world frame. The measure of the run summary.
+struct CoverageMeasure {
+  double area_m2 = 0.0;
+  double coverage = 0.0;
+};
+[[nodiscard]] CoverageMeasure measure_coverage(const OccupancyGrid& grid, const CellThresholds& cells, const TruthGrid& truth,
+                                               std::span<const std::uint8_t> reachable);
 
 /// One collision (a contact onset of the chassis).
 struct CollisionRecord {

@@ -3,7 +3,7 @@
 /// splitmix64's finaliser: derives independent seeds (chassis, sensors, Procedure 1) from a run's seed.
 #include <cstdint>
 
-namespace duet::sim {
+namespace duet {
 
 inline std::uint64_t mix(std::uint64_t x) {
   x += 0x9E3779B97F4A7C15ull;
@@ -12,4 +12,4 @@ inline std::uint64_t mix(std::uint64_t x) {
   return x ^ (x >> 31);
 }
 
-}  // namespace duet::sim
+}  // namespace duet
