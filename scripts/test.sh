@@ -3,7 +3,8 @@
 #   1. Release build            (build/),       ctest
 #   2. AddressSanitizer + UBSan (build-asan/),  ctest
 #   3. ThreadSanitizer          (build-tsan/),  the tests of everything that runs threads of its
-#      own: the runtime's background mode and its worker, the clocks. They run their TBB work in
+#      own: the runtime's background mode and its worker, the clocks, the C API's runtime with
+#      its own thread and pushes from three threads. They run their TBB work in
 #      one-thread arenas: Debian's TBB is not instrumented, so TSan cannot see TBB's own
 #      synchronisation (its parallel loops would show as races).
 #   4. Fuzzing                  (build-fuzz/),  every libFuzzer target (clang, ASan + UBSan +
@@ -27,10 +28,10 @@ if [ "${DUET_SKIP_SANITIZERS:-0}" != 1 ]; then
 
   echo "== duet: ThreadSanitizer build and the threaded tests"
   export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$here/tests/tsan.supp"
-  DUET_BUILD_TYPE=RelWithDebInfo DUET_BUILD_TARGETS=test_runtime \
+  DUET_BUILD_TYPE=RelWithDebInfo DUET_BUILD_TARGETS="test_runtime test_capi" \
     "$here/scripts/setup.sh" "$here/build-tsan" -DDUET_SANITIZE_THREAD=ON -DDUET_BUILD_BENCH=OFF
   (cd "$here/build-tsan" && ctest --output-on-failure -j "$jobs" --timeout 1800 \
-     -R '^(BackgroundWorker|BackgroundRuntime|Clock)\.')
+     -R '^(BackgroundWorker|BackgroundRuntime|Clock|CapiRuntimeThreads)\.')
 
   echo "== duet: fuzzing, ${DUET_FUZZ_SECONDS:-20} s per target"
   FUZZ_SEED=1 FUZZ_BUILD="$here/build-fuzz" "$here/scripts/fuzz.sh" "${DUET_FUZZ_SECONDS:-20}"
