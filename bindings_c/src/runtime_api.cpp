@@ -103,6 +103,10 @@ void convert(const duet_rgbd_image& in, const SensorProfile& sensor, RgbdImage& 
   for (int y = 0; y < h; ++y) {
     const std::uint8_t* row = in.color + static_cast<std::size_t>(y) * cs;
     std::uint8_t* dst = out.rgb.data() + static_cast<std::size_t>(y) * w * 3;
+    if (ch == 3 && !in.color_bgr) {  // the runtime's own layout: one copy per row
+      std::memcpy(dst, row, 3 * static_cast<std::size_t>(w));
+      continue;
+    }
     for (int x = 0; x < w; ++x, row += ch, dst += 3) {
       dst[0] = row[r];
       dst[1] = row[1];
