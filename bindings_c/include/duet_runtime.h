@@ -173,6 +173,17 @@ DUET_API void duet_runtime_join(duet_runtime runtime);
  * flight (see the top of this file). Thread-safe. */
 DUET_API void duet_runtime_save(duet_runtime runtime, const char* dir);
 
+/* Records every input stream the runtime takes - each sensor's frames (16-bit PNG depth, PNG
+ * colour), the odometry, the profile as run - into folder `dir` (new or empty), in duet's
+ * recording format (docs/recording.md: TUM RGB-D's rgb.txt/depth.txt per sensor, odometry.txt,
+ * with each message's arrival time). `duet replay DIR` maps it again; a lockstep run replays to
+ * the same grid and cloud, bit for bit. Only before the first control period (else
+ * INVALID_OPERATION); IO error naming the folder if it is not empty or not writable. A writer
+ * thread writes the files; when it falls behind, frames are dropped and counted
+ * (frames_record_dropped) - control never waits for the disk. The recording is closed by
+ * duet_runtime_join() or the last release. Thread-safe. */
+DUET_API void duet_runtime_record(duet_runtime runtime, const char* dir);
+
 /* ---- output ------------------------------------------------------------------------------ */
 
 enum duet_explorer_state {
@@ -248,6 +259,8 @@ typedef struct duet_runtime_stats {
   uint64_t relocalizations;       /* wide re-matches that moved the pose */
   uint64_t loop_closures;         /* closures that moved the map frame */
   uint64_t control_periods;       /* ticks run */
+  uint64_t frames_recorded;       /* duet_runtime_record(): frames written */
+  uint64_t frames_record_dropped; /* ... dropped (the disk was slower than the sensors) */
 } duet_runtime_stats;
 
 DUET_API void duet_runtime_get_stats(duet_runtime runtime, duet_runtime_stats* out);

@@ -4,8 +4,9 @@
 #include <duet/runtime/io/cloud_io.hpp>
 #include <duet/runtime/io/grid_io.hpp>
 #include <duet/runtime/io/output.hpp>
+#include <duet/runtime/io/runtime_outputs.hpp>
 
-#include <nlohmann/json.hpp>
+#include <map>
 
 #include <chrono>
 #include <cmath>
@@ -113,18 +114,6 @@ void convert(const duet_rgbd_image& in, const SensorProfile& sensor, RgbdImage& 
       dst[2] = row[b];
     }
   }
-}
-
-std::string tum_text(const std::vector<std::pair<double, Pose2>>& traj) {
-  std::string out = "# timestamp tx ty tz qx qy qz qw\n";  // as duet explore's trajectory.tum
-  char line[160];
-  for (const auto& [t, p] : traj) {
-    const double h = 0.5 * p.theta;
-    std::snprintf(line, sizeof line, "%.3f %.4f %.4f 0 0 0 %.6f %.6f\n", t, static_cast<double>(p.x), static_cast<double>(p.y),
-                  std::sin(h), std::cos(h));
-    out += line;
-  }
-  return out;
 }
 
 }  // namespace
@@ -286,6 +275,21 @@ DUET_API void duet_runtime_return_home(duet_runtime runtime) {
   });
 }
 
+DUET_API void duet_runtime_record(duet_runtime runtime, const char* dir) {
+  with_runtime(runtime, "duet_runtime_record", [&](Runtime& r) {
+    check_not_null(dir, "dir");
+    std::lock_guard lock(r.run);
+    if (r.rt) api_fail(DUET_ERROR_INVALID_OPERATION, "the runtime has run already: a recording starts before the first control period");
+    if (!r.record_dir.empty()) api_fail(DUET_ERROR_INVALID_OPERATION, "the runtime records already, to " + r.record_dir);
+    const std::filesystem::path p(dir);
+    std::error_code ec;
+    if (std::filesystem::exists(p, ec) && !(std::filesystem::is_directory(p, ec) && std::filesystem::is_empty(p, ec)))
+      api_fail(DUET_ERROR_IO, p.string() + ": a recording needs an empty or new folder");
+    duet::prepare_output_dir(p);
+    r.record_dir = p.string();
+  });
+}
+
 DUET_API void duet_runtime_join(duet_runtime runtime) {
   with_runtime(runtime, "duet_runtime_join", [&](Runtime& r) { r.join(); });
 }
@@ -399,6 +403,8 @@ DUET_API void duet_runtime_get_stats(duet_runtime runtime, duet_runtime_stats* o
       s.loop_closures = st.loop_closures;
     }
     s.control_periods = r.published.control_periods;
+    s.frames_recorded = r.published.recorded.frames_recorded;
+    s.frames_record_dropped = r.published.recorded.frames_dropped;
     *out = s;
   });
 }
@@ -418,53 +424,16 @@ DUET_API void duet_runtime_save(duet_runtime runtime, const char* dir) {
     duet::prepare_output_dir(out);
     std::lock_guard lock(r.run);
     r.drain_locked();
-    nlohmann::json j;
-    j["profile"] = r.profile.name;
-    j["control_periods"] = r.periods;
-    j["time_s"] = r.trajectory.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.trajectory.back().first);
-    if (r.rt) {
-      const duet::OccupancyGrid& grid = r.rt->map_grid();
-      if (grid.width() > 0 && grid.height() > 0) {
-        duet::write_map_server(grid, out / "grid.yaml");
-        duet::write_grid_png(grid, out / "grid.png");
-      }
-      duet::write_pcd(out / "cloud.pcd", r.rt->mapper().cloud(), duet::PcdEncoding::kBinaryCompressed);
-      const duet::RuntimeStats& st = r.rt->stats();
-      j["explorer_state"] = duet::to_string(r.rt->state());
-      j["stop_detail"] = r.rt->stop_detail();
-      j["execution"] = duet::to_string(r.rt->settings().execution);
-      j["sets_integrated"] = st.sets_integrated;
-      j["scan_matches"] = st.scan_matches;
-      j["scan_match_rejected"] = st.scan_match_rejected;
-      j["loop_closures"] = st.loop_closures;
-      j["relocalizations"] = st.relocalizations;
-      j["frames_received"] = st.frames_received;
-      j["frame_drops"] = st.frame_drops;
-      j["odometry_received"] = st.odometry_received;
-      j["input"] = {{"odometry_invalid", st.input.odometry_invalid},     {"odometry_out_of_order", st.input.odometry_out_of_order},
-                    {"odometry_jumps_absorbed", st.input.odometry_jumps}, {"frames_invalid", st.input.frames_invalid},
-                    {"frames_out_of_order", st.input.frames_out_of_order}, {"frames_empty", st.input.frames_empty},
-                    {"frames_garbled", st.input.frames_garbled},         {"clock_restarts", st.input.clock_restarts},
-                    {"sensor_silences", st.input.sensor_silences},       {"missing_frames", st.input.missing_frames},
-                    {"blind_holds", st.blind_holds}};
-      const duet::RuntimeTiming tm = r.rt->timing();
-      auto lat = [](const duet::LatencySummary& l) {
-        return nlohmann::json{{"count", l.count}, {"p50_ms", 1e3 * l.p50_s}, {"p99_ms", 1e3 * l.p99_s}, {"max_ms", 1e3 * l.max_s}, {"mean_ms", 1e3 * l.mean_s}};
-      };
-      j["runtime"] = {{"nominal_period_ms", 1e3 * tm.nominal_period_s}, {"control_period", lat(tm.control_period)},
-                      {"command_latency", lat(tm.command_latency)},    {"frame_to_map", lat(tm.frame_to_map)},
-                      {"decision", lat(tm.decision)},                  {"late_periods", tm.late_periods},
-                      {"missed_periods", tm.missed_periods}};
-    } else {
-      j["explorer_state"] = "idle";
-      j["stop_detail"] = "";
-    }
     const duet::PushStats ps = r.robot.stats();
-    j["push"] = {{"frames_pushed", ps.frames_pushed},       {"frames_queue_overflow", ps.frames_overflowed},
-                 {"frames_paused", r.paused_frames.load()}, {"odometry_pushed", ps.odometry_pushed},
-                 {"odometry_queue_overflow", ps.odometry_overflowed}, {"odometry_paused", r.paused_odometry.load()}};
-    duet::write_text_file(out / "trajectory.tum", tum_text(r.trajectory));
-    duet::write_text_file(out / "summary.json", j.dump(2) + "\n");
+    const std::map<std::string, double> push{
+        {"frames_pushed", static_cast<double>(ps.frames_pushed)},
+        {"frames_queue_overflow", static_cast<double>(ps.frames_overflowed)},
+        {"frames_paused", static_cast<double>(r.paused_frames.load())},
+        {"odometry_pushed", static_cast<double>(ps.odometry_pushed)},
+        {"odometry_queue_overflow", static_cast<double>(ps.odometry_overflowed)},
+        {"odometry_paused", static_cast<double>(r.paused_odometry.load())}};
+    if (!r.rt) api_fail(DUET_ERROR_INVALID_OPERATION, "the runtime has not run a control period yet: nothing to save");
+    duet::write_runtime_outputs(*r.rt, r.trajectory, out, push);
   });
 }
 

@@ -43,7 +43,13 @@ Profile c_profile(duet_profile_kind kind, const char* profile, const char* const
 Runtime::Runtime(std::shared_ptr<Device> d, Profile p)
     : Object(Kind::kRuntime), device(std::move(d)), profile(std::move(p)), robot(profile.sensors.size()) {}
 
-Runtime::~Runtime() { join(); }
+Runtime::~Runtime() {
+  try {
+    join();
+  } catch (...) {
+    // A recording's write error at release: nothing left to report it to.
+  }
+}
 
 void Runtime::ensure_origin(double t) {
   if (!std::isfinite(t)) return;
@@ -57,7 +63,15 @@ void Runtime::ensure_origin(double t) {
 void Runtime::make_runtime(Execution execution) {
   RuntimeSettings s = profile.runtime;
   s.execution = execution;
-  rt = std::make_unique<ExplorationRuntime>(profile, robot.chassis(), robot.sensors(), s);
+  RobotSource* source = &robot;
+  if (!record_dir.empty()) {
+    Profile recorded = profile;
+    recorded.runtime = s;  // the settings the runtime runs with: a replay runs the same
+    recorder = std::make_unique<Recorder>(record_dir, recorded);
+    recording = std::make_unique<RecordingSource>(robot, *recorder);
+    source = recording.get();
+  }
+  rt = std::make_unique<ExplorationRuntime>(profile, source->chassis(), source->sensors(), s);
   if (stop_requested) rt->stop("stopped by the operator");
 }
 
@@ -86,6 +100,7 @@ void Runtime::tick_locked(double now, std::vector<std::pair<double, std::string>
   }
   robot.set_time_origin(base);
   const double t = now - base;
+  if (recording) recording->advance(t);  // the arrival time of what the runtime takes now
   in_arena(*device, [&] { rt->tick(t); });
   ++periods;
   trajectory.emplace_back(now, rt->pose());
@@ -150,6 +165,7 @@ void Runtime::publish_locked(double now) {
   if (grid) published.grid = std::move(grid);
   published.control_periods = periods;
   published.stats = st;
+  if (recorder) published.recorded = recorder->stats();
 }
 
 void Runtime::drain_locked() {
@@ -205,6 +221,14 @@ void Runtime::join() {
     drain_locked();
   } catch (...) {
     // A background task's error at shutdown: nothing left to report it to.
+  }
+  if (recorder) {
+    const RecorderStats rs = recorder->stats();
+    {
+      std::lock_guard l2(pub);
+      published.recorded = rs;
+    }
+    recorder->close();  // throws the first write error (duet_runtime_join reports it)
   }
 }
 

@@ -14,6 +14,7 @@
 #include <duet/runtime/config/profile.hpp>
 #include <duet/runtime/robot/exploration_runtime.hpp>
 #include <duet/runtime/robot/push_robot.hpp>
+#include <duet/runtime/io/recording.hpp>
 
 #include <atomic>
 #include <condition_variable>
@@ -33,6 +34,7 @@ struct Published {
   std::shared_ptr<const OccupancyGrid> grid;
   std::uint64_t control_periods = 0;
   RuntimeStats stats;
+  RecorderStats recorded;
 };
 
 struct Runtime final : Object {
@@ -53,6 +55,9 @@ struct Runtime final : Object {
   // ---- the control side (lock `run`)
   std::mutex run;
   enum class Mode { kNone, kSpin, kThread } mode = Mode::kNone;
+  std::string record_dir;                        ///< duet_runtime_record(): made with the runtime
+  std::unique_ptr<Recorder> recorder;
+  std::unique_ptr<RecordingSource> recording;    ///< between the pushes and the runtime while recording
   std::unique_ptr<ExplorationRuntime> rt;
   double last_now = -std::numeric_limits<double>::infinity();  ///< your clock, last period
   double paused_total = 0.0;     ///< runtime time skipped by pauses [s]

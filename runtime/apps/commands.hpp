@@ -23,6 +23,10 @@ void add_profile_command(CLI::App& app, int& exit_code);
 void add_explore_command(CLI::App& app, int& exit_code);
 void add_compare_command(CLI::App& app, int& exit_code);
 void add_run_command(CLI::App& app, int& exit_code);
+void add_replay_command(CLI::App& app, int& exit_code);
+/// `duet map` on a folder (map_command.cpp), for `duet replay` of a TUM RGB-D folder.
+int run_map_folder(const std::string& input, const std::string& out, const std::string& profile, const std::string& layout, int threads,
+                   bool quiet);
 
 /// summary.json's timing of a run: the nominal control period and the latencies (p50/p99/max/mean, ms), late and missed periods.
 [[nodiscard]] nlohmann::json timing_json(const RuntimeTiming& timing);

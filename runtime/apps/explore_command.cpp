@@ -82,6 +82,7 @@ struct ExploreOptions {
   bool no_loop_closure = false;
   std::string on_done;  // empty: the profile's exploration.on_done
   std::vector<std::string> faults;  // --fault, added to the profile's
+  std::string record;               // --record DIR
   std::string strategy = "profile";
   std::vector<std::string> configs, sets;
   bool quiet = false;
@@ -209,6 +210,7 @@ int run_explore(const ExploreOptions& o) {
   if (o.execution == "background" || (o.execution == "auto" && o.realtime)) es.runtime.execution = Execution::kBackground;
   else if (o.execution == "lockstep") es.runtime.execution = Execution::kLockstep;
   es.use_true_pose = o.true_pose;
+  es.record_dir = o.record;
   es.faults.insert(es.faults.end(), o.faults.begin(), o.faults.end());
   (void)parse_faults(es.faults, profile.sensors.size());  // a bad --fault is an error before the run
   if (o.on_done == "return_home") es.runtime.explorer.on_done = OnDone::kReturnHome;
@@ -242,6 +244,12 @@ int run_explore(const ExploreOptions& o) {
                    "stopped", sim::to_string(s.stop_reason), s.stop_detail.empty() ? "" : ": ",
                    s.stop_detail.c_str(), s.sim_time_s, s.explored_area_m2, 100.0 * s.coverage, s.reachable_free_area_m2,
                    s.collisions, s.path_length_m, o.out.c_str());
+    }
+    if (!o.record.empty() && !o.quiet) {
+      const RecorderStats r = run.recording();
+      std::fprintf(stderr, "duet explore: recorded %llu frames and %llu odometry messages to %s (duet replay %s maps them again)\n",
+                   static_cast<unsigned long long>(r.frames_recorded), static_cast<unsigned long long>(r.odometry_recorded),
+                   o.record.c_str(), o.record.c_str());
     }
   });
   return stopped_by ? StopSignals::exit_code(stopped_by) : 0;
@@ -385,6 +393,9 @@ void add_explore_command(CLI::App& app, int& exit_code) {
       ->check(CLI::IsMember({"auto", "lockstep", "background"}))
       ->capture_default_str();
   cmd->add_flag("--true-pose", o->true_pose, "DEBUGGING: map with the true pose instead of the wheel odometry");
+  cmd->add_option("--record", o->record,
+                  "record every input stream the runtime takes (frames as PNG, odometry, the profile) into this new or empty "
+                  "folder (docs/recording.md); `duet replay DIR` maps it again");
   cmd->add_option("--fault", o->faults,
                   "inject a fault, KIND[:SENSOR]@START[+DURATION][=AMOUNT] (repeatable; e.g. camera_stop:1@60+10; kinds: camera_stop, "
                   "depth_zero, depth_noise, color_black, extrinsics, wheel_slip, odom_jump, stamp_disorder, stamp_duplicate, "

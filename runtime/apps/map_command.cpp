@@ -212,10 +212,22 @@ int run_map(const MapOptions& o) {
 
 }  // namespace
 
+int run_map_folder(const std::string& input, const std::string& out, const std::string& profile, const std::string& layout, int threads,
+                   bool quiet) {
+  MapOptions o;
+  o.input = input;
+  o.out = out;
+  o.profile = profile;
+  o.layout = layout;
+  o.threads = threads;
+  o.quiet = quiet;
+  return run_map(o);
+}
+
 void add_map_command(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<MapOptions>();
   auto* cmd = app.add_subcommand("map", "Map a folder of RGB-D frames with known camera poses into a cloud and a 2D grid");
-  cmd->add_option("input", o->input, "folder of frames (slambook2 or 3dmatch layout)")->required()->check(CLI::ExistingDirectory);
+  cmd->add_option("input", o->input, "folder of frames (slambook2, 3dmatch or TUM RGB-D layout)")->required()->check(CLI::ExistingDirectory);
   cmd->add_option("-o,--out", o->out, "output folder")->capture_default_str();
   cmd->add_option("-p,--profile", o->profile, "mapping settings: dual, single or a profile YAML")->capture_default_str();
   cmd->add_option("--up", o->up,
@@ -223,7 +235,7 @@ void add_map_command(CLI::App& app, int& exit_code) {
                   "-z or ux,uy,uz")
       ->capture_default_str();
   cmd->add_option("--floor-z", o->floor_z, "floor height in the gravity-aligned map frame [m], or auto")->capture_default_str();
-  cmd->add_option("--layout", o->layout, "auto, slambook2 or 3dmatch")->capture_default_str();
+  cmd->add_option("--layout", o->layout, "auto, slambook2, 3dmatch or tum")->capture_default_str();
   cmd->add_option("--leaf", o->leaf, "voxel size [m] (default: the profile's, 0.05)")->check(CLI::PositiveNumber);
   cmd->add_option("--grid-res", o->grid_res, "grid cell size [m], [0.001, 10] (default: the profile's, 0.05)")->check(CLI::Range(0.001, 10.0));
   cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();

@@ -77,6 +77,14 @@ SimExplore::SimExplore(World world, Profile profile, ExploreSettings settings)
     injector_ = std::make_unique<FaultInjector>(robot_, parse_faults(settings_.faults, profile_.sensors.size()), mix(settings_.seed ^ 0xFA017ull));
     fault_started_.assign(injector_->faults().size(), false);
   }
+  if (!settings_.record_dir.empty()) {
+    Profile recorded = profile_;
+    recorded.runtime = runtime_settings(settings_);  // the settings the runtime runs with: a replay runs the same
+    RecorderSettings rs;
+    rs.block_when_full = true;  // a simulation waits for the disk: nothing may be lost
+    recorder_ = std::make_unique<Recorder>(settings_.record_dir, recorded, rs);
+    recording_ = std::make_unique<RecordingSource>(source(), *recorder_);
+  }
   runtime_ = std::make_unique<ExplorationRuntime>(profile_, source().chassis(), source().sensors(), runtime_settings(settings_));
   dt_ = 1.0 / settings_.runtime.control_rate_hz;
   truth_ = rasterize(*world_, settings_.coverage_resolution_m, 0.0f, 0.6f);
@@ -248,6 +256,7 @@ void SimExplore::finish() {
   runtime_->drain();  // background tasks done: the mapper and the explorer are the caller's to read
   const CurvePoint p = measure();
   if (curve_.empty() || curve_.back().t_s < t_) curve_.push_back(p);
+  if (recorder_) recorder_->close();  // everything written (throws the first write error)
 }
 
 void SimExplore::interrupt(const std::string& why) {

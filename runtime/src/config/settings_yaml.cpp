@@ -60,6 +60,20 @@ class FieldReader {
       field = r_.number(n, path);
     } else if constexpr (std::is_same_v<T, int>) {
       field = static_cast<int>(r_.integer(n, path, kIntRange));
+    } else if constexpr (std::is_same_v<T, std::uint64_t>) {
+      // Seeds use the whole 64-bit range (with_run_seed): a plain decimal integer is read
+      // exactly; anything else goes through the number reader and its messages.
+      if (n.IsScalar()) {
+        const std::string& text = n.Scalar();
+        std::uint64_t v = 0;
+        const auto res = std::from_chars(text.data(), text.data() + text.size(), v);
+        if (res.ec == std::errc() && res.ptr == text.data() + text.size()) {
+          r_.record(path, n);
+          field = v;
+          return;
+        }
+      }
+      field = static_cast<T>(r_.integer(n, path, kUnsignedRange));
     } else if constexpr (std::is_integral_v<T> && std::is_unsigned_v<T>) {
       const std::int64_t v = r_.integer(n, path, kUnsignedRange);
       if (static_cast<std::uint64_t>(v) > std::numeric_limits<T>::max())

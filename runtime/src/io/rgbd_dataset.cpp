@@ -13,6 +13,7 @@
 #include <Eigen/SVD>
 
 #include <algorithm>
+#include <cstdio>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -239,10 +240,53 @@ SensorFrame RgbdFrame::sensor_frame(const Eigen::Isometry3f& T_target_camera) co
   return f;
 }
 
+namespace {
+
+/// "timestamp rest..." lines of a TUM list (comments and empty lines skipped), checked.
+std::vector<std::pair<double, std::vector<std::string>>> read_tum_list(const fs::path& p, std::size_t fields, const char* what) {
+  require_file(p, std::string("missing file (tum layout: ") + what + ")", input_limits::kTextBytes, what);
+  std::vector<std::pair<double, std::vector<std::string>>> out;
+  std::istringstream lines(read_text(p));
+  std::string line;
+  double last = -1e300;
+  for (std::size_t ln = 1; std::getline(lines, line); ++ln) {
+    const auto toks = split_ws(line);
+    if (toks.empty() || toks.front().starts_with("#")) continue;
+    const std::string where = p.string() + ":" + std::to_string(ln);
+    if (toks.size() < fields)
+      fail(ErrorCode::kParse, where + ": expected " + std::to_string(fields) + " fields, got " + std::to_string(toks.size()));
+    const double t = parse_number(toks[0], where, 0);
+    if (!(t > last)) fail(ErrorCode::kParse, where + ": stamp " + toks[0] + " is not after the previous line's (the list must be sorted, without duplicates)");
+    last = t;
+    out.emplace_back(t, std::vector<std::string>(toks.begin() + 1, toks.end()));
+  }
+  if (out.empty()) fail(ErrorCode::kParse, p.string() + ": no entries");
+  return out;
+}
+
+/// Index of the entry of `list` nearest to t, or npos if none is within max_dt.
+template <class L>
+std::size_t nearest(const L& list, double t, double max_dt) {
+  auto it = std::lower_bound(list.begin(), list.end(), t, [](const auto& e, double v) { return e.first < v; });
+  std::size_t best = std::string::npos;
+  double best_dt = max_dt;
+  for (auto c : {it, it == list.begin() ? it : std::prev(it)}) {
+    if (c == list.end()) continue;
+    const double dt = std::abs(c->first - t);
+    if (dt <= best_dt) {
+      best_dt = dt;
+      best = static_cast<std::size_t>(c - list.begin());
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
 RgbdDataset RgbdDataset::open(const fs::path& dir, const RgbdDatasetOptions& options) {
-  if (options.layout != "auto" && options.layout != "slambook2" && options.layout != "3dmatch")
+  if (options.layout != "auto" && options.layout != "slambook2" && options.layout != "3dmatch" && options.layout != "tum")
     fail(ErrorCode::kInvalidArgument,
-         "RgbdDatasetOptions::layout must be auto, slambook2 or 3dmatch, got '" + options.layout + "'");
+         "RgbdDatasetOptions::layout must be auto, slambook2, 3dmatch or tum, got '" + options.layout + "'");
   if (options.depth_units_per_m && !(*options.depth_units_per_m > 0.0f && std::isfinite(*options.depth_units_per_m)))
     fail(ErrorCode::kInvalidArgument, "RgbdDatasetOptions::depth_units_per_m must be > 0, got " +
                                           fmt(*options.depth_units_per_m));
@@ -262,6 +306,7 @@ RgbdDataset RgbdDataset::open(const fs::path& dir, const RgbdDatasetOptions& opt
   if (!is_dir(dir)) fail(ErrorCode::kIo, dir.string() + ": not a folder (expected an RGB-D dataset folder)");
 
   std::string layout = options.layout;
+  if (layout == "auto" && is_file(dir / "rgb.txt") && is_file(dir / "depth.txt") && is_file(dir / "groundtruth.txt")) layout = "tum";
   if (layout == "auto") {
     const bool slambook = is_file(dir / "pose.txt") && is_dir(dir / "color") && is_dir(dir / "depth");
     bool match3d = is_file(dir / "camera-intrinsics.txt");
@@ -289,7 +334,31 @@ RgbdDataset RgbdDataset::open(const fs::path& dir, const RgbdDatasetOptions& opt
   ds.depth_units_per_m_ = options.depth_units_per_m.value_or(kMillimetres);
   const float tol = options.rotation_tolerance;
 
-  if (layout == "slambook2") {
+  if (layout == "tum") {
+    ds.depth_units_per_m_ = options.depth_units_per_m.value_or(5000.0f);  // TUM RGB-D: 5000 units per metre
+    // rgb.txt and depth.txt ("timestamp filename"), groundtruth.txt ("timestamp tx ty tz qx qy
+    // qz qw"); every depth frame is paired with the colour frame and the pose nearest in time
+    // within 0.02 s (the TUM tools' associate.py default); depth frames without both are left out.
+    const auto rgb = read_tum_list(dir / "rgb.txt", 2, "rgb.txt");
+    const auto depth = read_tum_list(dir / "depth.txt", 2, "depth.txt");
+    const auto gt = read_tum_list(dir / "groundtruth.txt", 8, "groundtruth.txt");
+    for (const auto& [t, f] : depth) {
+      const std::size_t c = nearest(rgb, t, 0.02), g = nearest(gt, t, 0.02);
+      if (c == std::string::npos || g == std::string::npos) continue;
+      std::vector<std::string> pose(gt[g].second.begin(), gt[g].second.begin() + 7);
+      char name[64];
+      std::snprintf(name, sizeof name, "%.6f", t);
+      ds.frames_.push_back(Entry{name, dir / rgb[c].second[0], dir / f[0],
+                                 pose_from_tum_line(pose, (dir / "groundtruth.txt").string() + " (stamp " + name + ")", tol)});
+      require_file(ds.frames_.back().depth, "missing frame file (listed in depth.txt)", input_limits::kImageBytes, "depth image");
+      require_file(ds.frames_.back().color, "missing frame file (listed in rgb.txt)", input_limits::kImageBytes, "colour image");
+    }
+    if (ds.frames_.empty())
+      fail(ErrorCode::kParse, dir.string() + ": no depth frame has a colour frame and a ground-truth pose within 0.02 s");
+    if (options.intrinsics) ds.intrinsics_ = *options.intrinsics;
+    else if (is_file(dir / "camera-intrinsics.txt")) ds.intrinsics_ = intrinsics_from_file(dir / "camera-intrinsics.txt");
+    else ds.intrinsics_ = PinholeIntrinsics{};  // TUM's "ROS default" (525, 525, 319.5, 239.5) of 640x480
+  } else if (layout == "slambook2") {
     const fs::path color_dir = dir / "color", depth_dir = dir / "depth", pose_file = dir / "pose.txt";
     if (!is_dir(color_dir)) fail(ErrorCode::kIo, color_dir.string() + ": missing folder (slambook2 layout)");
     if (!is_dir(depth_dir)) fail(ErrorCode::kIo, depth_dir.string() + ": missing folder (slambook2 layout)");

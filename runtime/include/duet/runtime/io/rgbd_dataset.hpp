@@ -10,6 +10,12 @@
 ///    N = 1, 2, ... (sorted numerically; the k-th pose line belongs to the k-th frame).
 ///    The folder has no intrinsics: the layout's known values are used (Kinect of the
 ///    dataset: 640x480, fx 518, fy 519, cx 325.5, cy 253.5, 1000 units/m) unless overridden.
+///  - "tum" (TUM RGB-D benchmark folders):
+///      rgb.txt, depth.txt        "timestamp filename" (sorted, no duplicates)
+///      groundtruth.txt           "timestamp tx ty tz qx qy qz qw" (camera -> world)
+///      camera-intrinsics.txt     3x3 K (optional; default: TUM's "ROS default" 525, 525, 319.5, 239.5)
+///    Each depth frame takes the colour frame and the pose nearest in time within 0.02 s (as
+///    the TUM tools' associate.py); depth frames without both are left out. Depth: 5000 units/m.
 ///  - "3dmatch" (3DMatch / SUN3D, as in nvblox's test data):
 ///      camera-intrinsics.txt           3x3 matrix K
 ///      frame-NNNNNN.color.png          8-bit colour
@@ -44,7 +50,7 @@
 namespace duet {
 
 struct RgbdDatasetOptions {
-  /// "auto" (detect from the folder's contents), "slambook2" or "3dmatch".
+  /// "auto" (detect from the folder's contents), "slambook2", "3dmatch" or "tum".
   std::string layout = "auto";
   /// Replaces the intrinsics of the layout / folder. width and height must match the images.
   std::optional<PinholeIntrinsics> intrinsics;
@@ -90,7 +96,7 @@ class RgbdDataset {
 
   [[nodiscard]] const PinholeIntrinsics& intrinsics() const noexcept { return intrinsics_; }
   [[nodiscard]] float depth_units_per_m() const noexcept { return depth_units_per_m_; }
-  /// "slambook2" or "3dmatch".
+  /// "slambook2", "3dmatch" or "tum".
   [[nodiscard]] std::string layout() const { return layout_; }
   [[nodiscard]] const std::filesystem::path& root() const noexcept { return root_; }
   /// Frame i's name and pose without decoding its images.

@@ -37,6 +37,7 @@
 #include <duet/sim/world.hpp>
 #include <duet/runtime/robot/clock.hpp>
 #include <duet/runtime/robot/faults.hpp>
+#include <duet/runtime/io/recording.hpp>
 #include <duet/runtime/robot/synchronizer.hpp>
 
 #include <cstdint>
@@ -74,6 +75,9 @@ struct ExploreSettings {
   /// The run's health (resident memory, per-cycle time, map size) sampled every this often
   /// [s], [0, 3600]; 0 = never.
   double health_period_s = 60.0;
+  /// Record every input stream the runtime takes into this folder (new or empty;
+  /// runtime/io/recording.hpp); empty = no recording. `duet replay` maps it again.
+  std::string record_dir;
 };
 void validate(const ExploreSettings& s);
 
@@ -197,6 +201,8 @@ class SimExplore {
   [[nodiscard]] const std::vector<CollisionRecord>& collision_log() const noexcept { return collision_log_; }
   /// The health samples so far (ExploreSettings::health_period_s).
   [[nodiscard]] const std::vector<HealthSample>& health() const noexcept { return health_; }
+  /// The recording's counters (all 0 without ExploreSettings::record_dir).
+  [[nodiscard]] RecorderStats recording() const { return recorder_ ? recorder_->stats() : RecorderStats{}; }
   [[nodiscard]] Mapper& mapper() noexcept { return runtime_->mapper(); }
   [[nodiscard]] const Explorer& explorer() const noexcept { return runtime_->explorer(); }
   [[nodiscard]] const ExplorationRuntime& runtime() const noexcept { return *runtime_; }
@@ -209,7 +215,10 @@ class SimExplore {
   void finish();  ///< the run has stopped: drain the runtime, the last curve point
   void apply_sim_faults();  ///< extrinsics and kidnap at t_
   void sample_health(double tick_s, double step_s);  ///< one period's times; a sample when due
-  [[nodiscard]] RobotSource& source() { return injector_ ? static_cast<RobotSource&>(*injector_) : robot_; }
+  [[nodiscard]] RobotSource& source() {
+    if (recording_) return *recording_;
+    return injector_ ? static_cast<RobotSource&>(*injector_) : robot_;
+  }
   [[nodiscard]] double occupied_on_obstacles() const;
 
   std::shared_ptr<const World> world_;
@@ -217,6 +226,8 @@ class SimExplore {
   ExploreSettings settings_;
   SimRobot robot_;
   std::unique_ptr<FaultInjector> injector_;  ///< between robot_ and the runtime when faults are injected
+  std::unique_ptr<Recorder> recorder_;          ///< ExploreSettings::record_dir
+  std::unique_ptr<RecordingSource> recording_;  ///< between the source above and the runtime while recording
   std::vector<bool> fault_started_;
   std::unique_ptr<ExplorationRuntime> runtime_;
   TruthGrid truth_;

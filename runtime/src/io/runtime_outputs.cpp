@@ -1,0 +1,71 @@
+/// @file runtime_outputs.cpp
+/// A runtime's output files (see runtime_outputs.hpp).
+#include <duet/runtime/io/cloud_io.hpp>
+#include <duet/runtime/io/grid_io.hpp>
+#include <duet/runtime/io/output.hpp>
+#include <duet/runtime/io/runtime_outputs.hpp>
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+
+namespace duet {
+
+std::string tum_text(const Trajectory& trajectory) {
+  std::string out = "# timestamp tx ty tz qx qy qz qw\n";
+  char line[160];
+  for (const auto& [t, p] : trajectory) {
+    const double h = 0.5 * p.theta;
+    std::snprintf(line, sizeof line, "%.3f %.4f %.4f 0 0 0 %.6f %.6f\n", t, static_cast<double>(p.x), static_cast<double>(p.y), std::sin(h),
+                  std::cos(h));
+    out += line;
+  }
+  return out;
+}
+
+void write_runtime_outputs(ExplorationRuntime& rt, const Trajectory& trajectory, const std::filesystem::path& dir,
+                           const std::map<std::string, double>& extra) {
+  prepare_output_dir(dir);
+  const OccupancyGrid& grid = rt.map_grid();
+  if (grid.width() > 0 && grid.height() > 0) {
+    write_map_server(grid, dir / "grid.yaml");
+    write_grid_png(grid, dir / "grid.png");
+  }
+  write_pcd(dir / "cloud.pcd", rt.mapper().cloud(), PcdEncoding::kBinaryCompressed);
+  write_text_file(dir / "trajectory.tum", tum_text(trajectory));
+  const RuntimeStats& st = rt.stats();
+  nlohmann::json j;
+  j["profile"] = rt.profile().name;
+  j["time_s"] = trajectory.empty() ? nlohmann::json(nullptr) : nlohmann::json(trajectory.back().first);
+  j["control_periods"] = trajectory.size();
+  j["explorer_state"] = to_string(rt.state());
+  j["stop_detail"] = rt.stop_detail();
+  j["execution"] = to_string(rt.settings().execution);
+  j["sets_integrated"] = st.sets_integrated;
+  j["scan_matches"] = st.scan_matches;
+  j["scan_match_rejected"] = st.scan_match_rejected;
+  j["loop_closures"] = st.loop_closures;
+  j["relocalizations"] = st.relocalizations;
+  j["frames_received"] = st.frames_received;
+  j["frame_drops"] = st.frame_drops;
+  j["odometry_received"] = st.odometry_received;
+  j["input"] = {{"odometry_invalid", st.input.odometry_invalid},     {"odometry_out_of_order", st.input.odometry_out_of_order},
+                {"odometry_jumps_absorbed", st.input.odometry_jumps}, {"frames_invalid", st.input.frames_invalid},
+                {"frames_out_of_order", st.input.frames_out_of_order}, {"frames_empty", st.input.frames_empty},
+                {"frames_garbled", st.input.frames_garbled},         {"clock_restarts", st.input.clock_restarts},
+                {"sensor_silences", st.input.sensor_silences},       {"missing_frames", st.input.missing_frames},
+                {"blind_holds", st.blind_holds}};
+  const RuntimeTiming tm = rt.timing();
+  auto lat = [](const LatencySummary& l) {
+    return nlohmann::json{{"count", l.count}, {"p50_ms", 1e3 * l.p50_s}, {"p99_ms", 1e3 * l.p99_s}, {"max_ms", 1e3 * l.max_s}, {"mean_ms", 1e3 * l.mean_s}};
+  };
+  j["runtime"] = {{"nominal_period_ms", 1e3 * tm.nominal_period_s}, {"control_period", lat(tm.control_period)},
+                  {"command_latency", lat(tm.command_latency)},    {"frame_to_map", lat(tm.frame_to_map)},
+                  {"decision", lat(tm.decision)},                  {"late_periods", tm.late_periods},
+                  {"missed_periods", tm.missed_periods}};
+  for (const auto& [k, v] : extra) j[k] = v;
+  write_text_file(dir / "summary.json", j.dump(2) + "\n");
+}
+
+}  // namespace duet
