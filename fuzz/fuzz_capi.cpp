@@ -11,6 +11,7 @@
 
 #include <duet.h>
 
+#include <algorithm>
 #include <array>
 #include <vector>
 
@@ -23,7 +24,18 @@ struct State {
   std::vector<duet_cloud> clouds;
   std::vector<duet_grid> grids;
   std::vector<duet_planner> planners;
+  std::vector<duet_runtime> runtimes;
+  std::vector<duet_sim> sims;
+  int spins = 0;  ///< control periods run (each may map and decide: a few per input)
 };
+
+/// A robot profile with one 8x6 camera (frames small enough to fuzz; the runtime and the
+/// simulator take its sizes).
+constexpr const char* kTinyProfile =
+    "name: tiny\nchassis: {type: differential, radius_m: 0.2, wheel_base_m: 0.3, wheel_diameter_m: 0.07,"
+    " max_linear_speed_mps: 0.5, max_angular_speed_dps: 90, odometry_rate_hz: 50}\n"
+    "sensors:\n  - name: cam\n    intrinsics: {width: 8, height: 6, fov_h_deg: 57, fov_v_deg: 43}\n"
+    "    extrinsics: {xyz_m: [0.0, 0.0, 0.3], zyx_euler_deg: [0.0, 0.0, 0.0]}\n";
 
 template <class H>
 H pick(Bytes& in, const std::vector<H>& pool) {
@@ -468,6 +480,158 @@ void step(State& st, Bytes& in) {
       duet_device_set_error_callback(dev, in.get<std::uint8_t>() & 1 ? cb : nullptr, nullptr);
       break;
     }
+    case 30: {  // runtimes and simulators: made, released
+      const char* sets[] = {"runtime.sensor_rate_hz=1", "bogus.key=1", "runtime.control_rate_hz=nan"};
+      const std::size_t nsets = static_cast<std::size_t>(in.range(0, 3));
+      switch (in.get<std::uint8_t>() % 5) {
+        case 0:
+        case 1:
+          if (st.runtimes.size() < 2) {
+            const bool text = in.get<std::uint8_t>() % 4 != 0;
+            duet_runtime r = duet_runtime_new(dev, text ? DUET_PROFILE_YAML_TEXT : static_cast<duet_profile_kind>(in.range(-1, 2)),
+                                              text ? kTinyProfile : "tiny_no_such_profile", nsets ? sets : nullptr, nsets, in.get<std::uint8_t>());
+            check_error(dev);
+            if (r) {
+              if (in.get<std::uint8_t>() & 1) duet_runtime_set_time_origin(r, in.value(100.0f));
+              st.runtimes.push_back(r);
+            }
+          }
+          break;
+        case 2:
+          if (st.sims.empty()) {
+            duet_sim s = duet_sim_new(dev, in.get<std::uint8_t>() & 1 ? "lab" : "no_such_world", DUET_PROFILE_YAML_TEXT, kTinyProfile,
+                                      sets, nsets, in.get<std::uint8_t>());
+            check_error(dev);
+            if (s) st.sims.push_back(s);
+          }
+          break;
+        case 3:
+          if (!st.runtimes.empty()) {
+            duet_runtime_release(st.runtimes.back());
+            st.runtimes.pop_back();
+          }
+          break;
+        default:
+          if (!st.sims.empty()) {
+            duet_sim_release(st.sims.back());
+            st.sims.pop_back();
+          }
+      }
+      return;
+    }
+    case 31: {  // a runtime or a simulator used, with valid or broken arguments
+      duet_runtime r = pick(in, st.runtimes);
+      duet_sim sim = pick(in, st.sims);
+      switch (in.get<std::uint8_t>() % 12) {
+        case 0:
+        case 1: {
+          duet_rgbd_image im;
+          duet_rgbd_image_init(&im);
+          im.stamp_s = in.value(100.0f);
+          im.width = in.get<std::uint8_t>() % 4 ? 8 : static_cast<int>(in.range(-2, 12));
+          im.height = in.get<std::uint8_t>() % 4 ? 6 : static_cast<int>(in.range(-2, 12));
+          im.depth_format = static_cast<duet_depth_format>(in.range(0, 2));
+          im.depth_units_per_m = in.get<std::uint8_t>() % 3 ? 1000.0f : in.value(5000.0f);
+          const std::size_t px = im.depth_format == DUET_DEPTH_U16 ? 2 : 4;
+          im.depth_row_stride = stride(in, px * 8);
+          const std::size_t rows = 12, row_bytes = std::max<std::size_t>(stored(im.depth_row_stride, px * 8), px * 12);
+          std::vector<float> depth((rows * row_bytes) / 4 + 4);
+          for (auto& d : depth) d = in.get<std::uint8_t>() % 8 ? 1.5f : in.value(10.0f);
+          im.depth = in.get<std::uint8_t>() % 8 ? depth.data() : nullptr;
+          std::vector<std::uint8_t> colour(12 * 12 * 4 + 64, 100);
+          if (in.get<std::uint8_t>() & 1) {
+            im.color = colour.data();
+            im.color_channels = static_cast<int>(in.range(2, 5));
+            im.color_bgr = in.get<std::uint8_t>() & 1;
+            im.color_row_stride = in.get<std::uint8_t>() % 3 ? 0 : static_cast<std::size_t>(in.range(0, 48));
+          }
+          duet_runtime_push_rgbd(r, static_cast<std::size_t>(in.range(0, 2)), in.get<std::uint8_t>() % 16 ? &im : nullptr);
+          break;
+        }
+        case 2:
+          duet_runtime_push_odometry(r, in.value(100.0f), pose(in, 5.0f), duet_twist{in.value(2.0f), in.value(2.0f)});
+          break;
+        case 3:
+          if (st.spins < 4) {
+            ++st.spins;
+            duet_runtime_spin_once(r, in.value(100.0f));
+          }
+          break;
+        case 4: {
+          duet_runtime_status s;
+          duet_runtime_get_status(r, in.get<std::uint8_t>() % 8 ? &s : nullptr);
+          duet_runtime_stats t;
+          duet_runtime_get_stats(r, &t);
+          (void)duet_runtime_get_command(r);
+          char buf[16];
+          const std::size_t cap = static_cast<std::size_t>(in.range(0, 16));
+          (void)duet_runtime_get_stop_detail(r, cap ? buf : nullptr, cap);
+          const std::size_t n = static_cast<std::size_t>(in.range(0, 8));
+          const std::size_t ps = stride(in, 8);
+          std::vector<float> xy((stored(ps, 8) * n) / 4 + 2);
+          (void)duet_runtime_get_path(r, n ? xy.data() : nullptr, ps, n);
+          (void)duet_explorer_state_string(static_cast<duet_explorer_state>(in.range(-1, 6)));
+          (void)duet_pose_health_string(static_cast<duet_pose_health>(in.range(-1, 4)));
+          break;
+        }
+        case 5: {
+          duet_grid g = duet_runtime_get_grid(r);
+          if (g) duet_grid_release(g);
+          break;
+        }
+        case 6:
+          switch (in.get<std::uint8_t>() % 4) {
+            case 0: duet_runtime_pause(r); break;
+            case 1: duet_runtime_resume(r); break;
+            case 2: duet_runtime_stop(r); break;
+            default: duet_runtime_return_home(r);
+          }
+          break;
+        case 7: {
+          duet_runtime_sensor_info info;
+          duet_runtime_get_sensor_info(r, static_cast<std::size_t>(in.range(0, 2)), in.get<std::uint8_t>() % 8 ? &info : nullptr);
+          (void)duet_runtime_get_sensor_count(r);
+          (void)duet_runtime_get_control_period(r);
+          break;
+        }
+        case 8:
+          if (st.spins < 4) {
+            ++st.spins;
+            duet_sim_step(sim, duet_twist{in.value(1.0f), in.value(2.0f)}, in.get<std::uint8_t>() % 4 ? 0.05 : in.value(20.0f));
+          }
+          break;
+        case 9: {
+          double stamp = 0.0;
+          const int w = in.get<std::uint8_t>() % 4 ? 8 : static_cast<int>(in.range(-1, 12));
+          const int h = in.get<std::uint8_t>() % 4 ? 6 : static_cast<int>(in.range(-1, 12));
+          const std::size_t ds = stride(in, 16), cs = stride(in, 24);
+          std::vector<std::uint16_t> depth(12 * std::max<std::size_t>(stored(ds, 16), 24) / 2 + 8);
+          std::vector<std::uint8_t> rgb(12 * std::max<std::size_t>(stored(cs, 24), 36) + 8);
+          (void)duet_sim_take_frame(sim, static_cast<std::size_t>(in.range(0, 2)), &stamp, depth.data(), ds,
+                                    in.get<std::uint8_t>() & 1 ? rgb.data() : nullptr, cs, w, h);
+          double t[4];
+          duet_pose2 p[4];
+          duet_twist tw[4];
+          (void)duet_sim_take_odometry(sim, t, in.get<std::uint8_t>() & 1 ? p : nullptr, tw, static_cast<std::size_t>(in.range(0, 4)));
+          break;
+        }
+        case 10: {
+          duet_grid g = pick(in, st.grids);
+          double c = 0.0, a = 0.0;
+          duet_sim_score(sim, g, &c, &a);
+          (void)duet_sim_get_true_pose(sim);
+          (void)duet_sim_get_collisions(sim);
+          (void)duet_sim_get_time(sim);
+          (void)duet_sim_get_frames_waiting(sim, static_cast<std::size_t>(in.range(0, 2)));
+          break;
+        }
+        default: {
+          duet_cloud c = duet_runtime_get_cloud(r);
+          if (c) duet_cloud_release(c);
+        }
+      }
+      break;
+    }
     default:
       (void)duet_device_get_thread_count(dev);
       break;
@@ -483,6 +647,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   Bytes in(data, size);
   State st;
   for (int steps = 0; steps < 48 && !in.empty(); ++steps) step(st, in);
+  for (auto r : st.runtimes) duet_runtime_release(r);
+  for (auto s : st.sims) duet_sim_release(s);
   for (auto p : st.planners) duet_planner_release(p);
   for (auto g : st.grids) duet_grid_release(g);
   for (auto c : st.clouds) duet_cloud_release(c);

@@ -5,6 +5,8 @@
 ///   slambook2: pose.txt, color/1.png, depth/1.pgm, color/2.png, depth/2.png
 ///   3dmatch:   camera-intrinsics.txt, frame-000000.{color.png, depth.png, pose.txt},
 ///              frame-000001.{color.png, depth.png, pose.txt}
+/// With bit 2 set, the TUM RGB-D layout instead: rgb.txt, depth.txt, groundtruth.txt,
+/// camera-intrinsics.txt, 1.png, 1_depth.png, 2.png, 2_depth.png.
 /// Every frame that opens is loaded and back-projected.
 #include "fuzz_util.hpp"
 
@@ -14,9 +16,13 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
   duet::fuzz::clear_scratch();
-  const bool threedmatch = data[0] & 1;
+  const bool threedmatch = data[0] & 1, tum = data[0] & 4;
   const auto root = duet::fuzz::scratch() / "seq";
-  if (!threedmatch) {
+  if (tum) {
+    const auto p = duet::fuzz::split_parts(data + 1, size - 1, 8);
+    const char* names[] = {"rgb.txt", "depth.txt", "groundtruth.txt", "camera-intrinsics.txt", "1.png", "1_depth.png", "2.png", "2_depth.png"};
+    for (std::size_t i = 0; i < 8; ++i) duet::fuzz::put(std::string("seq/") + names[i], p[i]);
+  } else if (!threedmatch) {
     const auto p = duet::fuzz::split_parts(data + 1, size - 1, 5);
     duet::fuzz::put("seq/pose.txt", p[0]);
     duet::fuzz::put("seq/color/1.png", p[1]);

@@ -131,6 +131,26 @@ def rgbd_seeds():
     pose0 = b"1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n"
     pose1 = b"1 0 0 0.1\n0 1 0 0\n0 0 1 0.05\n0 0 0 1\n"
     put("rgbd", "3dmatch", b"\x01" + SEP.join([intr, colour, depth_png, pose0, colour, depth_png, pose1]))
+    rgb_txt = b"# timestamp filename\n1.000 1.png\n1.033 2.png\n"
+    depth_txt = b"# timestamp filename\n1.001 1_depth.png\n1.034 2_depth.png\n"
+    gt = b"# timestamp tx ty tz qx qy qz qw\n0.999 0 0 0 0 0 0 1\n1.035 0.01 0 0 0 0 0 1\n"
+    put("rgbd", "tum", b"\x06" + SEP.join([rgb_txt, depth_txt, gt, intr, colour, depth_png, colour, depth_png]))
+
+
+def recording_seeds():
+    # A one-sensor recording of 8x6 frames (fuzz_recording.cpp: profile.yaml is part 0).
+    src = open(os.path.join(HERE, "..", "profiles", "single_kinect_kobuki.yaml"), "rb").read()
+    profile = src.replace(b"width: 640", b"width: 8").replace(b"height: 480", b"height: 6")
+    meta = (b"format: duet-recording\nversion: 1\nprofile: profile.yaml\nodometry: odometry.txt\n"
+            b"sensors:\n  - {name: kinect, folder: s, width: 8, height: 6, depth_units_per_m: 1000}\n")
+    odom = b"# stamp x y theta v omega arrival\n0 0 0 0 0 0 0.05\n0.02 0.001 0 0 0.05 0 0.05\n0.04 0.002 0 0.001 0.05 0.02 0.05\n"
+    w, h = 8, 6
+    colour = png(w, h, 3, 8, [b"".join(bytes([x & 255, y & 255, 90]) for x in range(w)) for y in range(h)])
+    depth_rows = [b"".join(struct.pack(">H", 1000 + 2 * x + y if (x + y) % 5 else 0) for x in range(w)) for y in range(h)]
+    depth_png = png(w, h, 1, 16, depth_rows)
+    depth_txt = b"# stamp file arrival\n0 depth/000000.png 0.05\n"
+    rgb_txt = b"# stamp file arrival\n0 rgb/000000.png 0.05\n"
+    put("recording", "one_frame", SEP.join([profile, meta, odom, depth_txt, rgb_txt, depth_png, colour]))
 
 
 def profile_seeds():
@@ -153,6 +173,16 @@ def capi_seeds():
     # with a grid, a decision - then random bytes.
     script = bytes([0, 0, 2, 0, 2, 0, 3, 0, 0]) + bytes(rng.randrange(256) for _ in range(300))
     put("capi", "scripted", script)
+    # A device, a runtime on the tiny profile, a simulator of the lab, then runtime and
+    # simulator calls (fuzz_capi.cpp, cases 30 and 31) with random arguments.
+    u32 = lambda v: struct.pack("<I", v)
+    for k in range(2):
+        run = u32(0) + bytes([0]) + u32(2)
+        run += u32(0) + bytes([30]) + u32(1) + bytes([0, 1, 1, 0])
+        run += u32(0) + bytes([30]) + u32(0) + bytes([2, 1, 3])
+        for _ in range(24):
+            run += u32(0) + bytes([31]) + u32(0) + u32(0) + bytes(rng.randrange(256) for _ in range(rng.randrange(4, 40)))
+        put("capi", "runtime%d" % k, run)
 
 
 if __name__ == "__main__":
@@ -161,5 +191,6 @@ if __name__ == "__main__":
     map_seeds()
     world_seeds()
     rgbd_seeds()
+    recording_seeds()
     profile_seeds()
     capi_seeds()

@@ -223,12 +223,17 @@ void Runtime::join() {
     // A background task's error at shutdown: nothing left to report it to.
   }
   if (recorder) {
-    const RecorderStats rs = recorder->stats();
+    std::string error;
+    try {
+      recorder->close();  // everything written
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
     {
       std::lock_guard l2(pub);
-      published.recorded = rs;
+      published.recorded = recorder->stats();
     }
-    recorder->close();  // throws the first write error (duet_runtime_join reports it)
+    if (!error.empty()) fail(ErrorCode::kIo, error);  // the first write error (duet_runtime_join reports it)
   }
 }
 

@@ -472,3 +472,59 @@ TEST(DuetCli, SigintSavesTheRobotLoopsMapsSoFar) {
   EXPECT_GT(duet::read_map_server(out / "grid.yaml").known_cells(), 100u);
   EXPECT_TRUE(fs::exists(out / "cloud.pcd"));
 }
+
+namespace {
+
+std::string file_bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+TEST(DuetReplay, AnExploreRecordingReplaysToTheSameMaps) {
+  const fs::path d = temp_dir("replay-lab");
+  const CliRun e = run("explore -s 4 -t 10 -q -o " + (d / "run").string() + " --record " + (d / "rec").string());
+  ASSERT_EQ(e.code, 0) << e.output;
+  const CliRun again = run("explore -s 4 -t 10 -q -o " + (d / "run2").string() + " --record " + (d / "rec").string());
+  EXPECT_NE(again.code, 0) << again.output;  // a recording never overwrites another
+  EXPECT_NE(again.output.find("empty or new folder"), std::string::npos) << again.output;
+  const CliRun r = run("replay -q " + (d / "rec").string() + " -o " + (d / "replay").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* f : {"grid.pgm", "grid.yaml", "cloud.pcd"})
+    EXPECT_TRUE(file_bytes(d / "run" / f) == file_bytes(d / "replay" / f)) << f << " differs";
+  const auto s = nlohmann::json::parse(std::ifstream(d / "replay" / "summary.json"));
+  EXPECT_EQ(s["sets_integrated"].get<int>(), 11);
+}
+
+TEST(DuetReplay, ATumFolderNeedsGroundTruthPosesUntilVisualOdometryExists) {
+  REQUIRE_DATA("rgbd/tum_fr2_pair");
+  const fs::path d = temp_dir("replay-tum");
+  const fs::path src = data_dir() / "rgbd" / "tum_fr2_pair";
+  for (const char* f : {"1.png", "2.png", "1_depth.png", "2_depth.png"}) fs::copy_file(src / f, d / f);
+  std::ofstream(d / "rgb.txt") << "# timestamp filename\n1.000 1.png\n1.033 2.png\n";
+  std::ofstream(d / "depth.txt") << "# timestamp filename\n1.001 1_depth.png\n1.034 2_depth.png\n";
+  std::ofstream(d / "groundtruth.txt") << "# timestamp tx ty tz qx qy qz qw\n0.999 0 0 0 0 0 0 1\n1.035 0.01 0 0 0 0 0 1\n";
+  std::ofstream(d / "camera-intrinsics.txt") << "520.9 0 325.1\n0 521.0 249.7\n0 0 1\n";
+  const CliRun no_poses = run("replay -q " + d.string() + " -o " + (d / "out").string());
+  EXPECT_NE(no_poses.code, 0) << no_poses.output;
+  EXPECT_NE(no_poses.output.find("--poses groundtruth"), std::string::npos) << no_poses.output;
+  const CliRun r = run("replay -q --poses groundtruth " + d.string() + " -o " + (d / "out").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const duet::PointCloud cloud = duet::read_pcd(d / "out" / "cloud.pcd");
+  EXPECT_GT(cloud.size(), 1000u);
+  const auto s = nlohmann::json::parse(std::ifstream(d / "out" / "summary.json"));
+  EXPECT_EQ(s["frames"].get<int>(), 2);
+  // An unsorted list: an error naming the file and line.
+  std::ofstream(d / "rgb.txt") << "# timestamp filename\n1.033 2.png\n1.000 1.png\n";
+  const CliRun bad = run("replay -q --poses groundtruth " + d.string() + " -o " + (d / "out2").string());
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.output.find("rgb.txt:3"), std::string::npos) << bad.output;
+}
+
+TEST(DuetReplay, AFolderThatIsNeitherIsAnError) {
+  const fs::path d = temp_dir("replay-nothing");
+  const CliRun r = run("replay -q " + d.string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("neither a duet recording"), std::string::npos) << r.output;
+}
+
+}  // namespace

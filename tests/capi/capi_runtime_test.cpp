@@ -159,6 +159,37 @@ TEST_F(CapiRuntime, SavesTheFilesDuetExploreWrites) {
   EXPECT_NE(message().find("/proc/duet_cannot_write_here"), std::string::npos) << message();
 }
 
+TEST_F(CapiRuntime, RecordsWhatItTakesForAReplay) {
+  const auto dir = std::filesystem::temp_directory_path() / ("duet_capi_rec_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  Loop loop(device_, "lab", {});
+  ASSERT_TRUE(loop.ok()) << message();
+  duet_runtime_record(loop.rt(), dir.c_str());
+  ASSERT_EQ(take(), DUET_ERROR_NONE) << message();
+  duet_runtime_record(loop.rt(), dir.c_str());  // once
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_OPERATION);
+  loop.run_for(5.0);
+  duet_runtime_record(loop.rt(), (dir.string() + "_late").c_str());  // after the first period
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_OPERATION);
+  duet_runtime_join(loop.rt());
+  ASSERT_EQ(take(), DUET_ERROR_NONE) << message();
+  duet_runtime_stats st;
+  duet_runtime_get_stats(loop.rt(), &st);
+  EXPECT_EQ(st.frames_recorded, 12u);  // 2 sensors x t = 0 ... 5 s
+  EXPECT_EQ(st.frames_record_dropped, 0u);
+  std::ifstream meta(dir / "recording.yaml");
+  std::stringstream text;
+  text << meta.rdbuf();
+  EXPECT_NE(text.str().find("frames_recorded: 12"), std::string::npos) << text.str();
+  EXPECT_TRUE(std::filesystem::is_regular_file(dir / "kinect_front" / "depth" / "000005.png"));
+  // A folder in use is refused.
+  Loop other(device_, "lab", {});
+  duet_runtime_record(other.rt(), dir.c_str());
+  EXPECT_EQ(take(), DUET_ERROR_IO);
+  EXPECT_NE(message().find("empty or new folder"), std::string::npos) << message();
+  std::filesystem::remove_all(dir);
+}
+
 TEST_F(CapiRuntime, StopEndsExplorationAndHoldsStill) {
   Loop loop(device_, "lab", {});
   ASSERT_TRUE(loop.ok()) << message();
