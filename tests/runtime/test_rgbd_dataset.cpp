@@ -316,8 +316,12 @@ TEST(RgbdDatasetErrors, UnknownLayout) {
   EXPECT_EQ(e.code(), duet::ErrorCode::kParse);
   expect_contains(e.what(), "not a known RGB-D dataset layout");
   duet::RgbdDatasetOptions opt;
-  opt.layout = "tum";
+  opt.layout = "kitti";
   EXPECT_EQ(open_error(tmp.path(), opt).code(), duet::ErrorCode::kInvalidArgument);
+  opt.layout = "tum";  // known, but its files are missing
+  const duet::Error t = open_error(tmp.path(), opt);
+  EXPECT_EQ(t.code(), duet::ErrorCode::kIo);
+  expect_contains(t.what(), "rgb.txt");
 }
 
 TEST(RgbdDatasetErrors, MissingFrameFile) {

@@ -323,7 +323,8 @@ RgbdDataset RgbdDataset::open(const fs::path& dir, const RgbdDatasetOptions& opt
            dir.string() + (slambook ? ": looks like both RGB-D layouts; pass the layout explicitly"
                                     : ": not a known RGB-D dataset layout; expected slambook2 (pose.txt, "
                                       "color/N.png, depth/N.pgm) or 3dmatch (camera-intrinsics.txt, "
-                                      "frame-NNNNNN.color.png, .depth.png, .pose.txt)"));
+                                      "frame-NNNNNN.color.png, .depth.png, .pose.txt) or tum (rgb.txt, depth.txt, "
+                                      "groundtruth.txt)"));
     layout = slambook ? "slambook2" : "3dmatch";
   }
 
