@@ -62,7 +62,7 @@
  *   invalidated by any later call that modifies that cloud; coordinate that yourself.
  *   Results never depend on the device's thread count.
  *
- * Frames and units (DESIGN.md §6)
+ * Frames and units
  *   SI units (metres, radians unless a name says _deg). Robot frame: x forward, y left, z up.
  *   Camera optical frame: z forward, x right, y down. A transform T_a_b maps b coordinates
  *   into a coordinates. Matrices are 4x4, column-major float[16] (OpenGL / Eigen layout:
@@ -456,7 +456,7 @@ DUET_API void duet_grid_copy_ros(duet_grid grid, int8_t* out, size_t count,
                                  float occupied_threshold, float free_threshold);
 
 /* ============================================================================================
- * Exploration planner (paper §3, Fig. 6; DESIGN.md §1 "exploration" and "control")
+ * Exploration planner (paper §3, Fig. 6)
  *
  * A duet_planner holds everything the exploration and control kernels need between calls:
  *   - a copy of a 2D log-odds grid (the map frame of "Occupancy grid" above: row-major, row 0
@@ -688,7 +688,7 @@ typedef struct duet_exploration_settings {
 
 DUET_API void duet_exploration_settings_init(duet_exploration_settings* settings);
 
-/* What the chassis can do (paper §4.1 Kobuki; DESIGN.md §7: 0.5 m/s while exploring). */
+/* What the chassis can do (paper §4.1: a Kobuki, 0.5 m/s while exploring). */
 typedef struct duet_chassis_limits {
   float max_v_mps;      /* forward speed limit, > 0 [m/s] (default 0.5) */
   float min_v_mps;      /* reverse speed limit, <= 0 [m/s] (default -0.2) */
