@@ -23,15 +23,18 @@
  *   touching it:
  *     NULL handle                                   -> DUET_ERROR_INVALID_ARGUMENT
  *     released handle, or a handle of another type   -> DUET_ERROR_INVALID_OPERATION
+ *   The error goes to the device the bad handle belongs to when duet knows it and it lives (a
+ *   handle of another type; one of the last 65536 released handles), else to the calling
+ *   thread's no-device slot (see Errors).
  *   A released handle is detected without reading freed memory and is never recycled, so a
  *   stale handle can never silently refer to a newer object.
  *
  * Errors
  *   No function returns an error code. Each device keeps the FIRST error that happened since
- *   the last duet_device_get_error() (get-and-clear), the message of the LAST error, and an
+ *   the last duet_device_get_error() (get-and-clear) with its message, and an
  *   optional callback that is called synchronously for every error. Errors that have no usable
- *   device (NULL or released device handle, a failed duet_device_new, a NULL/dead cloud or grid
- *   handle whose device cannot be known) go to a thread-local "no device" slot read with
+ *   device (NULL or released device handle, a failed duet_device_new, a NULL handle, a dead
+ *   handle whose device cannot be known or is released) go to a thread-local "no device" slot read with
  *   duet_device_get_error(NULL) / duet_device_get_error_message(NULL). A function that fails
  *   leaves its outputs unchanged (clouds, grids and caller buffers) unless stated otherwise and
  *   returns NULL / 0 when it returns a value. No C++ exception ever crosses this API.
@@ -162,10 +165,11 @@ DUET_API int duet_device_get_thread_count(duet_device device);
  * Thread-safe. */
 DUET_API enum duet_error duet_device_get_error(duet_device device);
 
-/* Message of the last error recorded on `device` (NULL: this thread's no-device slot), ""
- * if there was none. Not cleared by duet_device_get_error(). The returned string is owned by
- * duet and valid until the next duet_device_get_error_message() call on the same thread.
- * Thread-safe. */
+/* Message of the error duet_device_get_error() returns - the first since the previous
+ * get_error - or, after that call, of the error it returned ("" if there was none). Later
+ * errors before the next get_error do not replace it (each reaches the callback). NULL: this
+ * thread's no-device slot. The returned string is owned by duet and valid until the next
+ * duet_device_get_error_message() call on the same thread. Thread-safe. */
 DUET_API const char* duet_device_get_error_message(duet_device device);
 
 /* Sets (callback != NULL) or removes (callback == NULL) the error callback of `device`.

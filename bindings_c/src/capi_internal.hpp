@@ -184,14 +184,16 @@ void in_arena(Device& device, F&& body) {
 /// if `obj->parent` != 0). Returns the handle key.
 std::uint64_t register_object(std::shared_ptr<Object> obj);
 
-/// Looks `handle` up. On failure reports (no-device slot) and returns nullptr:
-/// NULL -> INVALID_ARGUMENT, dead or foreign -> INVALID_OPERATION, other kind -> INVALID_OPERATION.
+/// Looks `handle` up. On failure reports and returns nullptr: NULL -> INVALID_ARGUMENT, dead
+/// or foreign -> INVALID_OPERATION, other kind -> INVALID_OPERATION. The error goes to the
+/// device the handle belongs to when it is known and alive (a handle of another kind, or one of
+/// the last released ones) and `to_owner`, else to the no-device slot.
 std::shared_ptr<Object> lookup(const void* handle, Kind expected, const char* fn,
-                               const char* arg) noexcept;
+                               const char* arg, bool to_owner = true) noexcept;
 
 template <class T>
-std::shared_ptr<T> resolve(const void* handle, const char* fn, const char* arg) noexcept {
-  return std::static_pointer_cast<T>(lookup(handle, KindOf<T>::value, fn, arg));
+std::shared_ptr<T> resolve(const void* handle, const char* fn, const char* arg, bool to_owner = true) noexcept {
+  return std::static_pointer_cast<T>(lookup(handle, KindOf<T>::value, fn, arg, to_owner));
 }
 
 void retain_handle(const void* handle, Kind expected, const char* fn) noexcept;

@@ -1,6 +1,7 @@
 // The handle registry, error reporting, the device and the version (duet.h).
 #include "capi_internal.hpp"
 
+#include <deque>
 #include <duet_version.h>
 
 #include <tbb/info.h>
@@ -29,6 +30,23 @@ struct Registry {
   std::mutex mutex;
   std::unordered_map<std::uint64_t, Entry> live;
   std::uint64_t next_id = 1;
+  /// Released handles -> their creating device (the latest kDeadKept), so that an error about a
+  /// released handle reaches that device while it lives.
+  static constexpr std::size_t kDeadKept = 65536;
+  std::unordered_map<std::uint64_t, std::uint64_t> dead;
+  std::deque<std::uint64_t> dead_order;
+  void bury(std::uint64_t key, std::uint64_t parent) {
+    if (parent == 0) return;
+    try {
+      if (dead.emplace(key, parent).second) dead_order.push_back(key);
+      while (dead_order.size() > kDeadKept) {
+        dead.erase(dead_order.front());
+        dead_order.pop_front();
+      }
+    } catch (...) {
+      // Out of memory: the error goes to the no-device slot instead.
+    }
+  }
 };
 
 Registry& registry() {
@@ -178,22 +196,26 @@ void report(Device* device, duet_error code, const char* fn, const char* message
   bool verbose = false;
   if (device != nullptr) {
     std::lock_guard lock(device->error_mutex);
-    if (device->first_error == DUET_ERROR_NONE) device->first_error = code;
-    try {
-      device->last_message = text;
-    } catch (...) {
-      device->last_message.clear();
+    if (device->first_error == DUET_ERROR_NONE) {  // the message stays the one of the code get_error returns
+      device->first_error = code;
+      try {
+        device->last_message = text;
+      } catch (...) {
+        device->last_message.clear();
+      }
     }
     cb = device->callback;
     user = device->callback_user;
     verbose = device->verbose;
   } else {
     NoDeviceSlot& slot = no_device_slot();
-    if (slot.first_error == DUET_ERROR_NONE) slot.first_error = code;
-    try {
-      slot.last_message = text;
-    } catch (...) {
-      slot.last_message.clear();
+    if (slot.first_error == DUET_ERROR_NONE) {
+      slot.first_error = code;
+      try {
+        slot.last_message = text;
+      } catch (...) {
+        slot.last_message.clear();
+      }
     }
     GlobalCallback& g = global_callback();
     std::lock_guard lock(g.mutex);
@@ -237,9 +259,10 @@ std::uint64_t register_object(std::shared_ptr<Object> obj) {
 }
 
 std::shared_ptr<Object> lookup(const void* handle, Kind expected, const char* fn,
-                               const char* arg) noexcept {
+                               const char* arg, bool to_owner) noexcept {
   duet_error code = DUET_ERROR_NONE;
   std::string message;
+  std::shared_ptr<Device> owner;  // where the error goes: the handle's device if known and alive
   try {
     if (handle == nullptr) {
       code = DUET_ERROR_INVALID_ARGUMENT;
@@ -251,6 +274,12 @@ std::shared_ptr<Object> lookup(const void* handle, Kind expected, const char* fn
         std::lock_guard lock(r.mutex);
         auto it = r.live.find(key_of(handle));
         if (it != r.live.end()) obj = it->second.object;
+        // The device the handle belongs to, if it is known and alive: the error goes there.
+        std::uint64_t dev_key = 0;
+        if (obj) dev_key = obj->kind == Kind::kDevice ? obj->key : obj->parent;
+        else if (auto d = r.dead.find(key_of(handle)); d != r.dead.end()) dev_key = d->second;
+        if (auto dv = (dev_key && to_owner) ? r.live.find(dev_key) : r.live.end(); dv != r.live.end() && dv->second.object->kind == Kind::kDevice)
+          owner = std::static_pointer_cast<Device>(dv->second.object);
       }
       if (obj && obj->kind == expected) return obj;
       code = DUET_ERROR_INVALID_OPERATION;
@@ -266,7 +295,7 @@ std::shared_ptr<Object> lookup(const void* handle, Kind expected, const char* fn
     if (code == DUET_ERROR_NONE) code = DUET_ERROR_OUT_OF_MEMORY;
     message.clear();
   }
-  report(nullptr, code, fn, message.empty() ? "invalid handle" : message.c_str());
+  report(owner.get(), code, fn, message.empty() ? "invalid handle" : message.c_str());
   return nullptr;
 }
 
@@ -305,6 +334,7 @@ void release_handle(const void* handle, Kind expected, const char* fn) noexcept 
         } catch (...) {
           // Could not keep it for later destruction: it dies here, under the lock.
         }
+        r.bury(it->first, parent);
         r.live.erase(it);
         it = parent != 0 ? r.live.find(parent) : r.live.end();
       }
@@ -417,7 +447,7 @@ DUET_API enum duet_error duet_device_get_error(duet_device device) {
   }
   NoDeviceSlot& slot = no_device_slot();
   const duet_error pending = slot.first_error;
-  auto d = resolve<Device>(device, "duet_device_get_error", "device");
+  auto d = resolve<Device>(device, "duet_device_get_error", "device", false);
   if (!d) {
     // The failure was recorded in the no-device slot (message, callback); hand the code out
     // right away instead of leaving it pending there.
@@ -433,7 +463,7 @@ DUET_API const char* duet_device_get_error_message(duet_device device) {
   try {
     if (device == nullptr) {
       out = no_device_slot().last_message;
-    } else if (auto d = resolve<Device>(device, "duet_device_get_error_message", "device")) {
+    } else if (auto d = resolve<Device>(device, "duet_device_get_error_message", "device", false)) {
       std::lock_guard lock(d->error_mutex);
       out = d->last_message;
     } else {

@@ -199,22 +199,24 @@ TEST(CapiMisuse, WrongHandleTypeIsAnInvalidOperation) {
   duet_cloud c = duet_cloud_new(d);
   duet_grid g = duet_grid_new(d, 0.05f);
 
+  // The errors reach the device the bad handle belongs to (issue 20); the no-device slot stays clean.
   duet_cloud_get_size(reinterpret_cast<duet_cloud>(g));
-  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_OPERATION);
-  std::string msg = duet_device_get_error_message(nullptr);
+  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_NONE);
+  EXPECT_EQ(duet_device_get_error(d), DUET_ERROR_INVALID_OPERATION);
+  std::string msg = duet_device_get_error_message(d);
   EXPECT_NE(msg.find("is a duet_grid, expected a duet_cloud"), std::string::npos) << msg;
 
   EXPECT_EQ(duet_grid_get_width(reinterpret_cast<duet_grid>(c)), 0);
-  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_OPERATION);
+  EXPECT_EQ(duet_device_get_error(d), DUET_ERROR_INVALID_OPERATION);
 
   EXPECT_EQ(duet_cloud_new(reinterpret_cast<duet_device>(c)), nullptr);
-  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_OPERATION);
-  msg = duet_device_get_error_message(nullptr);
+  EXPECT_EQ(duet_device_get_error(d), DUET_ERROR_INVALID_OPERATION);
+  msg = duet_device_get_error_message(d);
   EXPECT_NE(msg.find("is a duet_cloud, expected a duet_device"), std::string::npos) << msg;
 
   // Releasing through the wrong type must not drop a reference.
   duet_cloud_release(reinterpret_cast<duet_cloud>(g));
-  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_OPERATION);
+  EXPECT_EQ(duet_device_get_error(d), DUET_ERROR_INVALID_OPERATION);
   EXPECT_EQ(duet_grid_get_width(g), 0);
   EXPECT_EQ(duet_device_get_error(d), DUET_ERROR_NONE);
 
@@ -235,7 +237,8 @@ TEST(CapiMisuse, HandlesAreNeverRecycled) {
     duet_cloud_release(c);
   }
   duet_cloud_get_size(first);
-  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_OPERATION);
+  EXPECT_EQ(duet_device_get_error(d), DUET_ERROR_INVALID_OPERATION);  // a released handle's device hears of it
+  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_NONE);
   duet_device_release(d);
   EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_NONE);
 }
@@ -252,9 +255,9 @@ TEST(CapiMisuse, RetainReleaseCounts) {
   EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_NONE);
   duet_cloud_release(c);
   duet_cloud_get_size(c);
-  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_OPERATION);
+  EXPECT_EQ(duet_device_get_error(d), DUET_ERROR_INVALID_OPERATION);
   duet_cloud_release(c);  // double release
-  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_OPERATION);
+  EXPECT_EQ(duet_device_get_error(d), DUET_ERROR_INVALID_OPERATION);
   duet_device_release(d);
   EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_NONE);
 }
@@ -359,12 +362,16 @@ TEST_F(DeviceTest, GetErrorReturnsTheFirstErrorAndClears) {
   std::memcpy(both, huge, sizeof huge);
   std::memcpy(both + 3, tiny, sizeof tiny);
   duet_voxel_filter(c, both, 0, nullptr, 0, 2, &vf);  // OUT_OF_RANGE: voxel index overflow
-  const std::string last = message();
-  EXPECT_NE(last.find("duet_voxel_filter"), std::string::npos) << last;
+  // The code and the message are the first error's (issue 20: they were the first code with
+  // the last message).
+  const std::string first = message();
+  EXPECT_NE(first.find("duet_cloud_copy_points"), std::string::npos) << first;
   EXPECT_EQ(take(), DUET_ERROR_INVALID_ARGUMENT);  // the first one
+  EXPECT_EQ(message(), first);                     // still the message of the error just taken
   EXPECT_EQ(take(), DUET_ERROR_NONE);              // cleared
-  EXPECT_EQ(message(), last);                      // the message is not cleared
+  EXPECT_EQ(message(), first);                     // the message is not cleared
   duet_voxel_filter(c, both, 0, nullptr, 0, 2, &vf);
+  EXPECT_NE(message().find("duet_voxel_filter"), std::string::npos) << message();  // the next first error
   EXPECT_EQ(take(), DUET_ERROR_OUT_OF_RANGE);
   duet_cloud_release(c);
 }

@@ -1136,16 +1136,17 @@ TEST(CapiPlannerMisuse, NullReleasedAndWrongKindHandles) {
     EXPECT_NE(msg.find(call.name), std::string::npos) << msg;
     EXPECT_NE(msg.find("NULL"), std::string::npos) << msg;
 
+    // A released or wrong-kind handle: the error reaches the device it belongs to.
     call.call(dead);
-    EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_OPERATION);
-    msg = duet_device_get_error_message(nullptr);
+    EXPECT_EQ(duet_device_get_error(d), DUET_ERROR_INVALID_OPERATION);
+    msg = duet_device_get_error_message(d);
     EXPECT_NE(msg.find("not a live duet_planner"), std::string::npos) << msg;
 
     call.call(reinterpret_cast<duet_planner>(c));
-    EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_OPERATION);
-    msg = duet_device_get_error_message(nullptr);
+    EXPECT_EQ(duet_device_get_error(d), DUET_ERROR_INVALID_OPERATION);
+    msg = duet_device_get_error_message(d);
     EXPECT_NE(msg.find("is a duet_cloud, expected a duet_planner"), std::string::npos) << msg;
-    EXPECT_EQ(duet_device_get_error(d), DUET_ERROR_NONE);  // nothing reaches the device
+    EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_NONE);  // nothing in the no-device slot
   }
   // The device and the grid are still fine (the wrong-kind release dropped nothing).
   EXPECT_EQ(duet_grid_get_width(g), 0);
@@ -1154,11 +1155,11 @@ TEST(CapiPlannerMisuse, NullReleasedAndWrongKindHandles) {
   // A planner handle where a device or grid is expected.
   duet_planner p = duet_planner_new(d);
   EXPECT_EQ(duet_planner_new(reinterpret_cast<duet_device>(p)), nullptr);
-  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_OPERATION);
-  EXPECT_NE(std::string(duet_device_get_error_message(nullptr)).find("is a duet_planner, expected a duet_device"),
+  EXPECT_EQ(duet_device_get_error(d), DUET_ERROR_INVALID_OPERATION);
+  EXPECT_NE(std::string(duet_device_get_error_message(d)).find("is a duet_planner, expected a duet_device"),
             std::string::npos);
   duet_planner_set_grid_from(p, reinterpret_cast<duet_grid>(p), nullptr, nullptr);
-  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_OPERATION);
+  EXPECT_EQ(duet_device_get_error(d), DUET_ERROR_INVALID_OPERATION);
   duet_planner_set_grid_from(p, nullptr, nullptr, nullptr);
   EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_ARGUMENT);
   EXPECT_EQ(duet_planner_new(nullptr), nullptr);

@@ -452,16 +452,19 @@ TEST_F(CapiRuntime, MisuseIsAnErrorNeverACrash) {
   // Handles: NULL, wrong kind, released.
   duet_runtime_spin_once(nullptr, 1.0);
   EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_ARGUMENT);
+  // Wrong kind and released handles: the error reaches their device.
   duet_runtime_spin_once(reinterpret_cast<duet_runtime>(sim), 1.0);
-  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_OPERATION);
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_OPERATION);
   duet_sim_step(reinterpret_cast<duet_sim>(rt), duet_twist{0, 0}, 0.05);
-  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_OPERATION);
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_OPERATION);
   duet_runtime_release(rt);
   duet_sim_release(sim);
   duet_runtime_push_odometry(rt, 1.0, duet_pose2{0, 0, 0}, duet_twist{0, 0});
-  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_OPERATION);
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_OPERATION);
+  EXPECT_NE(message().find("not a live duet_runtime"), std::string::npos) << message();
   EXPECT_EQ(duet_sim_get_collisions(sim), 0u);
-  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_OPERATION);
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_OPERATION);
+  EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_NONE);
   EXPECT_STREQ(duet_explorer_state_string(static_cast<duet_explorer_state>(42)), "?");
   EXPECT_STREQ(duet_pose_health_string(DUET_POSE_LOST), "lost");
 }
