@@ -483,7 +483,32 @@ void step(State& st, Bytes& in) {
     case 30: {  // runtimes and simulators: made, released
       const char* sets[] = {"runtime.sensor_rate_hz=1", "bogus.key=1", "runtime.control_rate_hz=nan"};
       const std::size_t nsets = static_cast<std::size_t>(in.range(0, 3));
-      switch (in.get<std::uint8_t>() % 5) {
+      switch (in.get<std::uint8_t>() % 8) {
+        case 5: {  // a profile's settings
+          duet_profile_settings ps;
+          duet_profile_settings_load(dev, static_cast<duet_profile_kind>(in.range(-1, 2)), in.get<std::uint8_t>() & 1 ? kTinyProfile : "dual",
+                                     nsets ? sets : nullptr, nsets, in.get<std::uint8_t>() % 8 ? &ps : nullptr);
+          break;
+        }
+        case 6: {  // a grid saved as a map_server map and loaded again
+          duet_grid g = pick(in, st.grids);
+          const std::string path = (duet::fuzz::scratch() / "capi_map.yaml").string();
+          duet_grid_save_map_server(g, in.get<std::uint8_t>() % 8 ? path.c_str() : nullptr);
+          check_error(dev);
+          duet_grid loaded = duet_grid_load_map_server(dev, in.get<std::uint8_t>() % 8 ? path.c_str() : "/nonexistent.yaml");
+          check_error(dev);
+          if (loaded && st.grids.size() < 4) st.grids.push_back(loaded);
+          else if (loaded) duet_grid_release(loaded);
+          break;
+        }
+        case 7: {  // a forgotten frame size
+          duet_sensor_frame f;
+          duet_sensor_frame_init(&f);
+          std::uint16_t d[4] = {1000, 1000, 1000, 1000};
+          f.depth = d;
+          duet_back_project(pick(in, st.clouds), &f, 1, nullptr, nullptr);
+          break;
+        }
         case 0:
         case 1:
           if (st.runtimes.size() < 2) {

@@ -110,7 +110,7 @@ int main(void) {
 
   /* ---- two sensors, Eq. (6): x y z [m], ZYX Euler yaw pitch roll [rad] ---- */
   for (s = 0; s < 2; ++s) {
-    duet_sensor_frame_init(&frames[s]); /* 640x480, Kinect intrinsics, uint16 mm */
+    duet_sensor_frame_init(&frames[s]); /* Kinect intrinsics, uint16 mm; the size is ours to set */
     depth[s] = (uint16_t*)malloc(sizeof(uint16_t) * WIDTH * HEIGHT);
     if (depth[s] == NULL) {
       fprintf(stderr, "example: out of memory\n");

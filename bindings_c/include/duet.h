@@ -237,8 +237,9 @@ enum duet_depth_format {
 
 typedef struct duet_sensor_frame {
   /* depth image (required), row-major, caller memory read in place */
-  const void* depth;                  /* width * height pixels of depth_format */
-  int width, height;                  /* [px], > 0 */
+  const void* depth;                  /* width * height pixels of depth_format; uint16 in the
+                                       * machine's native byte order */
+  int width, height;                  /* [px], > 0: must be set (init leaves 0) */
   size_t depth_row_stride;            /* bytes between rows, 0 = packed */
   enum duet_depth_format depth_format;
   float depth_units_per_m;            /* DUET_DEPTH_U16 only, > 0 (default 1000: millimetres) */
@@ -257,7 +258,8 @@ typedef struct duet_sensor_frame {
   float T_robot_camera[16];
 } duet_sensor_frame;
 
-/* Fills `frame` with defaults: no data, 640x480, DUET_DEPTH_U16 at 1000 units/m, no colour,
+/* Fills `frame` with defaults: no data, size 0 x 0 (set width and height: a forgotten size is
+ * an error, never an over-read), DUET_DEPTH_U16 at 1000 units/m, no colour,
  * 3 channels RGB, Kinect intrinsics, identity transform. Thread-safe. */
 DUET_API void duet_sensor_frame_init(duet_sensor_frame* frame);
 
@@ -458,6 +460,19 @@ DUET_API void duet_grid_copy_logodds(duet_grid grid, float* out, size_t count);
 DUET_API void duet_grid_copy_probabilities(duet_grid grid, float* out, size_t count);
 DUET_API void duet_grid_copy_ros(duet_grid grid, int8_t* out, size_t count,
                                  float occupied_threshold, float free_threshold);
+
+/* A ROS map_server map (its YAML and the image it names: trinary, scale or raw modes, negate,
+ * thresholds) as a new grid on `device`: occupied pixels get log-odds 3.5, free -2.0 (the
+ * grid update's clamps: as certain as a map gets), unknown NaN, in-between values of the
+ * scale and raw modes their probability's log-odds; origin and resolution from the YAML. Errors name the file
+ * (IO: missing, not a regular file or too large; PARSE: malformed YAML or image). Returns NULL
+ * on error. Thread-safe. */
+DUET_API duet_grid duet_grid_load_map_server(duet_device device, const char* yaml_path);
+
+/* Writes `grid` as a map_server map: `yaml_path` and a trinary PGM beside it (same stem, .pgm;
+ * occupied p >= 0.65, free p <= 0.45, else unknown), each written under a temporary name and
+ * renamed. IO error naming the file when it cannot be written. Thread-safe (shared on grid). */
+DUET_API void duet_grid_save_map_server(duet_grid grid, const char* yaml_path);
 
 /* ============================================================================================
  * Exploration planner (paper §3, Fig. 6)

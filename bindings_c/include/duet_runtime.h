@@ -70,6 +70,34 @@ DUET_API void duet_runtime_retain(duet_runtime runtime);
 /* Dropping the last reference stops the runtime's thread (if started) and frees everything. */
 DUET_API void duet_runtime_release(duet_runtime runtime);
 
+/* ---- profiles ----------------------------------------------------------------------------- */
+
+/* Every kernel setting of a robot profile, for the kernel and planner calls of duet.h: what the
+ * runtime would run with. The duet_*_settings_init() functions give the built-in "dual"
+ * profile's values (the one place duet's defaults come from). */
+typedef struct duet_profile_settings {
+  float grid_resolution_m;                          /* mapping.grid_resolution_m [m] */
+  duet_back_projection_settings back_projection;
+  duet_voxel_filter_settings voxel_filter;
+  duet_normal_settings normals;
+  duet_segmentation_settings segmentation;
+  duet_grid_update_settings grid_update;
+  duet_scan_match_settings scan_match;              /* the runtime's scan-to-map correction */
+  duet_observation_settings observation;
+  duet_inflation_settings inflation;
+  duet_path_settings path;
+  duet_exploration_settings exploration;            /* Procedure 1 + frontier + eps_R */
+  duet_dwa_settings dwa;
+  size_t sensor_count;                              /* the profile's sensors, <= 16 */
+  duet_sensor_sector sensors[16];                   /* their fans (extrinsics, field of view, range, rays) */
+} duet_profile_settings;
+
+/* Loads a profile (as duet_runtime_new: kind, profile, set_count overrides) into *out. Errors
+ * name the file, line and key (IO, PARSE, INVALID_ARGUMENT); *out is then unchanged.
+ * Thread-safe. */
+DUET_API void duet_profile_settings_load(duet_device device, enum duet_profile_kind kind, const char* profile,
+                                         const char* const* sets, size_t set_count, duet_profile_settings* out);
+
 /* What the runtime expects of sensor i (from the profile). */
 typedef struct duet_runtime_sensor_info {
   int width, height;          /* [px]: every frame pushed for this sensor has this size */

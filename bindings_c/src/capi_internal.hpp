@@ -28,6 +28,7 @@
 #include <duet/kernels/partial_sim.hpp>
 #include <duet/kernels/path.hpp>
 #include <duet/kernels/scan_match.hpp>
+#include <duet/runtime/config/profile.hpp>
 
 #include <tbb/task_arena.h>
 
@@ -244,6 +245,11 @@ void check_count(std::size_t expected, std::size_t given, const char* name);
 /// Throws ApiError(INVALID_ARGUMENT) when `ptr` is NULL.
 void check_not_null(const void* ptr, const char* name);
 
+/// The built-in dual profile (profiles/dual_kinect_kobuki.yaml): the one place the C API's
+/// defaults come from (every duet_*_settings_init(), the settings NULL stands for), so that C
+/// runs with the values `duet explore` and duet_runtime use.
+const Profile& default_profile();
+
 // ---- settings (settings.cpp): C struct -> C++ settings, defaults for NULL, validated ------
 
 BackProjectionSettings to_cpp(const duet_back_projection_settings* s);
@@ -264,6 +270,20 @@ FrontierSettings to_cpp(const duet_frontier_settings* s, const char* name = "set
 PartialSimSettings to_cpp(const duet_partial_sim_settings* s, const char* name = "settings");
 ExplorationSettings to_cpp(const duet_exploration_settings* s, const char* name = "settings");
 DwaSettings to_cpp(const duet_dwa_settings* s, const char* name = "settings");
+
+/// C settings structs from C++ settings (the duet_*_settings_init() bodies; settings.cpp,
+/// planner_settings.cpp).
+void fill(const BackProjectionSettings& c, duet_back_projection_settings* settings);
+void fill(const VoxelFilterSettings& c, duet_voxel_filter_settings* settings);
+void fill(const NormalSettings& c, duet_normal_settings* settings);
+void fill(const SegmentationSettings& c, duet_segmentation_settings* settings);
+void fill(const GridUpdateSettings& c, duet_grid_update_settings* settings);
+void fill(const ScanMatchSettings& c, duet_scan_match_settings* settings);
+void fill(const ObservationSettings& c, duet_observation_settings* settings);
+void fill(const InflationSettings& c, duet_inflation_settings* settings);
+void fill(const PathSettings& c, duet_path_settings* settings);
+void fill(const ExplorationSettings& c, duet_exploration_settings* settings);
+void fill(const DwaSettings& c, duet_dwa_settings* settings);
 
 /// C mirrors of the kernel results (planner_settings.cpp).
 duet_sensor_sector to_c(const SensorSector& s);

@@ -1,6 +1,8 @@
 // duet_grid: creation, reference counting, update and copies (duet.h, "Occupancy grid").
 #include "capi_internal.hpp"
 
+#include <duet/runtime/io/grid_io.hpp>
+
 #include <cmath>
 #include <span>
 #include <string>
@@ -43,6 +45,31 @@ DUET_API duet_grid duet_grid_new(duet_device device, float resolution_m) {
     result = to_handle<duet_grid>(register_object(std::move(g)));
   });
   return result;
+}
+
+DUET_API duet_grid duet_grid_load_map_server(duet_device device, const char* yaml_path) {
+  static constexpr const char* fn = "duet_grid_load_map_server";
+  auto d = resolve<Device>(device, fn, "device");
+  if (!d) return nullptr;
+  duet_grid result = nullptr;
+  guarded(d.get(), fn, [&] {
+    check_not_null(yaml_path, "yaml_path");
+    duet::OccupancyGrid loaded = duet::read_map_server(yaml_path);
+    auto g = std::make_shared<Grid>(d, loaded.resolution());
+    g->grid = std::move(loaded);
+    g->parent = d->key;
+    result = to_handle<duet_grid>(register_object(std::move(g)));
+  });
+  return result;
+}
+
+DUET_API void duet_grid_save_map_server(duet_grid grid, const char* yaml_path) {
+  with_grid(grid, "duet_grid_save_map_server", [&](Grid& g) {
+    check_not_null(yaml_path, "yaml_path");
+    std::shared_lock lock(g.mutex);
+    if (g.grid.width() == 0 || g.grid.height() == 0) invalid_argument("the grid is empty (0 x 0 cells): nothing to save");
+    duet::write_map_server(g.grid, yaml_path);
+  });
 }
 
 DUET_API void duet_grid_retain(duet_grid grid) {

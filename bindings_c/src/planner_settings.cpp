@@ -1,6 +1,7 @@
 // The planner's settings (duet.h, "Exploration planner"): duet_*_settings_init(), the conversion
 // of the C settings structs to the C++ ones (validated), the C mirrors of the kernel results and
-// the status strings. The C++ structs' in-class defaults are the single source of the defaults.
+// the status strings. The defaults are the built-in dual profile's (default_profile()): the same
+// values `duet explore` and duet_runtime run with.
 #include "capi_internal.hpp"
 
 #include <cmath>
@@ -145,7 +146,7 @@ SensorSector to_cpp(const duet_sensor_sector& c) {
 }
 
 ObservationSettings to_cpp(const duet_observation_settings* s, const char* name) {
-  ObservationSettings c;
+  ObservationSettings c = default_profile().exploration.observation;
   if (s != nullptr) {
     const int backend = enum_value(s->backend);
     if (backend != DUET_OBSERVATION_EMBREE && backend != DUET_OBSERVATION_DDA) {
@@ -161,7 +162,7 @@ ObservationSettings to_cpp(const duet_observation_settings* s, const char* name)
 }
 
 InflationSettings to_cpp(const duet_inflation_settings* s, const char* name) {
-  InflationSettings c;
+  InflationSettings c = default_profile().exploration.inflation;
   if (s != nullptr) {
     c.thresholds = from_c(s->thresholds);
     c.robot_radius_m = s->robot_radius_m;
@@ -173,7 +174,7 @@ InflationSettings to_cpp(const duet_inflation_settings* s, const char* name) {
 }
 
 PathSettings to_cpp(const duet_path_settings* s, const char* name) {
-  PathSettings c;
+  PathSettings c = default_profile().exploration.path;
   if (s != nullptr) {
     c.allow_diagonal = flag(s->allow_diagonal, name, "allow_diagonal");
     c.clearance_weight = s->clearance_weight;
@@ -185,19 +186,19 @@ PathSettings to_cpp(const duet_path_settings* s, const char* name) {
 }
 
 FrontierSettings to_cpp(const duet_frontier_settings* s, const char* name) {
-  FrontierSettings c = s != nullptr ? from_c(*s) : FrontierSettings{};
+  FrontierSettings c = s != nullptr ? from_c(*s) : default_profile().exploration.strategy.frontier;
   validate_as(c, name);
   return c;
 }
 
 PartialSimSettings to_cpp(const duet_partial_sim_settings* s, const char* name) {
-  PartialSimSettings c = s != nullptr ? from_c(*s) : PartialSimSettings{};
+  PartialSimSettings c = s != nullptr ? from_c(*s) : default_profile().exploration.strategy.simulation;
   validate_as(c, name);
   return c;
 }
 
 ExplorationSettings to_cpp(const duet_exploration_settings* s, const char* name) {
-  ExplorationSettings c;
+  ExplorationSettings c = default_profile().exploration.strategy;
   if (s != nullptr) {
     c.simulation = from_c(s->simulation);
     c.frontier = from_c(s->frontier);
@@ -209,7 +210,7 @@ ExplorationSettings to_cpp(const duet_exploration_settings* s, const char* name)
 }
 
 DwaSettings to_cpp(const duet_dwa_settings* s, const char* name) {
-  DwaSettings c;
+  DwaSettings c = default_profile().exploration.dwa;
   if (s != nullptr) {
     c.limits.max_v_mps = s->limits.max_v_mps;
     c.limits.min_v_mps = s->limits.min_v_mps;
@@ -296,78 +297,34 @@ duet_frontier_result to_c(const FrontierResult& r) {
   return c;
 }
 
-}  // namespace duet::capi
-
-using namespace duet::capi;
-
-extern "C" {
-
-DUET_API void duet_sensor_sector_init(duet_sensor_sector* sector) {
-  if (sector == nullptr) return;
-  *sector = to_c(duet::SensorSector{});
-}
-
-DUET_API void duet_paper_dual_sensors(duet_sensor_sector out[2], int rays_per_sensor) {
-  guarded(nullptr, "duet_paper_dual_sensors", [&] {
-    check_not_null(out, "out");
-    if (rays_per_sensor < 1 || rays_per_sensor > 100000) {
-      invalid_argument("rays_per_sensor is " + std::to_string(rays_per_sensor) + " (allowed: [1, 100000])");
-    }
-    const auto s = duet::paper_dual_sensors(rays_per_sensor);
-    if (s.size() != 2) api_fail(DUET_ERROR_UNKNOWN, "paper_dual_sensors did not return 2 sensors (internal error)");
-    out[0] = to_c(s[0]);
-    out[1] = to_c(s[1]);
-  });
-}
-
-DUET_API void duet_observation_settings_init(duet_observation_settings* settings) {
-  if (settings == nullptr) return;
-  const duet::ObservationSettings c;
+void fill(const duet::ObservationSettings& c, duet_observation_settings* settings) {
   settings->thresholds = to_c(c.thresholds);
   settings->backend = c.backend == duet::ObservationBackend::kEmbree ? DUET_OBSERVATION_EMBREE : DUET_OBSERVATION_DDA;
   settings->tile_cells = c.tile_cells;
 }
 
-DUET_API void duet_inflation_settings_init(duet_inflation_settings* settings) {
-  if (settings == nullptr) return;
-  const duet::InflationSettings c;
+void fill(const duet::InflationSettings& c, duet_inflation_settings* settings) {
   settings->thresholds = to_c(c.thresholds);
   settings->robot_radius_m = c.robot_radius_m;
   settings->unknown_is_obstacle = c.unknown_is_obstacle ? 1 : 0;
   settings->uncertain_is_obstacle = c.uncertain_is_obstacle ? 1 : 0;
 }
 
-DUET_API void duet_path_settings_init(duet_path_settings* settings) {
-  if (settings == nullptr) return;
-  const duet::PathSettings c;
+void fill(const duet::PathSettings& c, duet_path_settings* settings) {
   settings->allow_diagonal = c.allow_diagonal ? 1 : 0;
   settings->clearance_weight = c.clearance_weight;
   settings->clearance_decay_m = c.clearance_decay_m;
   settings->goal_tolerance_m = c.goal_tolerance_m;
 }
 
-DUET_API void duet_frontier_settings_init(duet_frontier_settings* settings) {
-  if (settings == nullptr) return;
-  *settings = to_c(duet::FrontierSettings{});
-}
-
-DUET_API void duet_partial_sim_settings_init(duet_partial_sim_settings* settings) {
-  if (settings == nullptr) return;
-  *settings = to_c(duet::PartialSimSettings{});
-}
-
-DUET_API void duet_exploration_settings_init(duet_exploration_settings* settings) {
-  if (settings == nullptr) return;
-  const duet::ExplorationSettings c;
+void fill(const duet::ExplorationSettings& c, duet_exploration_settings* settings) {
   settings->simulation = to_c(c.simulation);
   settings->frontier = to_c(c.frontier);
   settings->eps_r_bits = c.eps_r_bits;
   settings->use_simulation = c.use_simulation ? 1 : 0;
 }
 
-DUET_API void duet_dwa_settings_init(duet_dwa_settings* settings) {
-  if (settings == nullptr) return;
-  const duet::DwaSettings c;
+void fill(const duet::DwaSettings& c, duet_dwa_settings* settings) {
   settings->limits.max_v_mps = c.limits.max_v_mps;
   settings->limits.min_v_mps = c.limits.min_v_mps;
   settings->limits.max_omega_rps = c.limits.max_omega_rps;
@@ -397,6 +354,65 @@ DUET_API void duet_dwa_settings_init(duet_dwa_settings* settings) {
   settings->rotate_tolerance_rad = c.rotate_tolerance_rad;
   settings->backoff_distance_m = c.backoff_distance_m;
   settings->backoff_speed_mps = c.backoff_speed_mps;
+}
+
+}  // namespace duet::capi
+
+using namespace duet::capi;
+
+extern "C" {
+
+DUET_API void duet_sensor_sector_init(duet_sensor_sector* sector) {
+  if (sector == nullptr) return;
+  *sector = to_c(duet::SensorSector{});
+}
+
+DUET_API void duet_paper_dual_sensors(duet_sensor_sector out[2], int rays_per_sensor) {
+  guarded(nullptr, "duet_paper_dual_sensors", [&] {
+    check_not_null(out, "out");
+    if (rays_per_sensor < 1 || rays_per_sensor > 100000) {
+      invalid_argument("rays_per_sensor is " + std::to_string(rays_per_sensor) + " (allowed: [1, 100000])");
+    }
+    const auto s = duet::paper_dual_sensors(rays_per_sensor);
+    if (s.size() != 2) api_fail(DUET_ERROR_UNKNOWN, "paper_dual_sensors did not return 2 sensors (internal error)");
+    out[0] = to_c(s[0]);
+    out[1] = to_c(s[1]);
+  });
+}
+
+DUET_API void duet_observation_settings_init(duet_observation_settings* settings) {
+  if (settings == nullptr) return;
+  fill(default_profile().exploration.observation, settings);
+}
+
+DUET_API void duet_inflation_settings_init(duet_inflation_settings* settings) {
+  if (settings == nullptr) return;
+  fill(default_profile().exploration.inflation, settings);
+}
+
+DUET_API void duet_path_settings_init(duet_path_settings* settings) {
+  if (settings == nullptr) return;
+  fill(default_profile().exploration.path, settings);
+}
+
+DUET_API void duet_frontier_settings_init(duet_frontier_settings* settings) {
+  if (settings == nullptr) return;
+  *settings = to_c(default_profile().exploration.strategy.frontier);
+}
+
+DUET_API void duet_partial_sim_settings_init(duet_partial_sim_settings* settings) {
+  if (settings == nullptr) return;
+  *settings = to_c(default_profile().exploration.strategy.simulation);
+}
+
+DUET_API void duet_exploration_settings_init(duet_exploration_settings* settings) {
+  if (settings == nullptr) return;
+  fill(default_profile().exploration.strategy, settings);
+}
+
+DUET_API void duet_dwa_settings_init(duet_dwa_settings* settings) {
+  if (settings == nullptr) return;
+  fill(default_profile().exploration.dwa, settings);
 }
 
 DUET_API const char* duet_path_status_string(enum duet_path_status status) {

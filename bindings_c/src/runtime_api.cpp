@@ -139,6 +139,34 @@ DUET_API duet_runtime duet_runtime_new(duet_device device, enum duet_profile_kin
   return result;
 }
 
+DUET_API void duet_profile_settings_load(duet_device device, enum duet_profile_kind kind, const char* profile,
+                                         const char* const* sets, size_t set_count, duet_profile_settings* out) {
+  static constexpr const char* fn = "duet_profile_settings_load";
+  auto d = resolve<Device>(device, fn, "device");
+  if (!d) return;
+  guarded(d.get(), fn, [&] {
+    check_not_null(out, "out");
+    const duet::Profile p = c_profile(kind, profile, sets, set_count, 0);
+    duet_profile_settings r{};
+    r.grid_resolution_m = p.mapping.grid_resolution_m;
+    fill(p.mapping.back_projection, &r.back_projection);
+    fill(p.mapping.voxel_filter, &r.voxel_filter);
+    fill(p.mapping.normals, &r.normals);
+    fill(p.mapping.segmentation, &r.segmentation);
+    fill(p.mapping.grid_update, &r.grid_update);
+    fill(p.runtime.pose_correction.match, &r.scan_match);
+    fill(p.exploration.observation, &r.observation);
+    fill(p.exploration.inflation, &r.inflation);
+    fill(p.exploration.path, &r.path);
+    fill(p.exploration.strategy, &r.exploration);
+    fill(p.exploration.dwa, &r.dwa);
+    const std::vector<duet::SensorSector> sectors = duet::observation_sectors(p);
+    r.sensor_count = std::min<std::size_t>(sectors.size(), 16);
+    for (std::size_t i = 0; i < r.sensor_count; ++i) r.sensors[i] = to_c(sectors[i]);
+    *out = r;
+  });
+}
+
 DUET_API void duet_runtime_retain(duet_runtime runtime) { retain_handle(runtime, Kind::kRuntime, "duet_runtime_retain"); }
 DUET_API void duet_runtime_release(duet_runtime runtime) { release_handle(runtime, Kind::kRuntime, "duet_runtime_release"); }
 

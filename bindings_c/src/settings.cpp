@@ -27,7 +27,7 @@ ClusteringSettings from_c(const duet_clustering_settings& s) {
 }  // namespace
 
 BackProjectionSettings to_cpp(const duet_back_projection_settings* s) {
-  BackProjectionSettings c;
+  BackProjectionSettings c = default_profile().mapping.back_projection;
   if (s != nullptr) {
     c.min_depth_m = s->min_depth_m;
     c.max_depth_m = s->max_depth_m;
@@ -38,7 +38,7 @@ BackProjectionSettings to_cpp(const duet_back_projection_settings* s) {
 }
 
 VoxelFilterSettings to_cpp(const duet_voxel_filter_settings* s) {
-  VoxelFilterSettings c;
+  VoxelFilterSettings c = default_profile().mapping.voxel_filter;
   if (s != nullptr) {
     c.leaf_size_m = s->leaf_size_m;
     c.min_points_per_voxel = s->min_points_per_voxel;
@@ -48,7 +48,7 @@ VoxelFilterSettings to_cpp(const duet_voxel_filter_settings* s) {
 }
 
 NormalSettings to_cpp(const duet_normal_settings* s) {
-  NormalSettings c;
+  NormalSettings c = default_profile().mapping.normals;
   if (s != nullptr) {
     c.k = s->k;
     c.viewpoint = Eigen::Vector3f(s->viewpoint[0], s->viewpoint[1], s->viewpoint[2]);
@@ -64,7 +64,7 @@ ClusteringSettings to_cpp(const duet_clustering_settings* s) {
 }
 
 SegmentationSettings to_cpp(const duet_segmentation_settings* s) {
-  SegmentationSettings c;
+  SegmentationSettings c = default_profile().mapping.segmentation;
   if (s != nullptr) {
     c.floor_z_m = s->floor_z_m;
     c.max_floor_tilt_deg = s->max_floor_tilt_deg;
@@ -78,7 +78,7 @@ SegmentationSettings to_cpp(const duet_segmentation_settings* s) {
 }
 
 GridUpdateSettings to_cpp(const duet_grid_update_settings* s) {
-  GridUpdateSettings c;
+  GridUpdateSettings c = default_profile().mapping.grid_update;
   if (s != nullptr) {
     if (s->clear_along_rays != 0 && s->clear_along_rays != 1) {
       invalid_argument("settings.clear_along_rays is " + std::to_string(s->clear_along_rays) +
@@ -97,7 +97,7 @@ GridUpdateSettings to_cpp(const duet_grid_update_settings* s) {
 }
 
 ScanMatchSettings to_cpp(const duet_scan_match_settings* s) {
-  ScanMatchSettings c;
+  ScanMatchSettings c = default_profile().runtime.pose_correction.match;
   if (s != nullptr) {
     c.linear_window_m = s->linear_window_m;
     c.angular_window_deg = s->angular_window_deg;
@@ -114,42 +114,28 @@ ScanMatchSettings to_cpp(const duet_scan_match_settings* s) {
   return c;
 }
 
-}  // namespace duet::capi
+const Profile& default_profile() {
+  static const Profile p = builtin_profile("dual");
+  return p;
+}
 
-using namespace duet::capi;
-
-extern "C" {
-
-DUET_API void duet_back_projection_settings_init(duet_back_projection_settings* settings) {
-  if (settings == nullptr) return;
-  const duet::BackProjectionSettings c;
+void fill(const duet::BackProjectionSettings& c, duet_back_projection_settings* settings) {
   settings->min_depth_m = c.min_depth_m;
   settings->max_depth_m = c.max_depth_m;
   settings->pixel_step = c.pixel_step;
 }
 
-DUET_API void duet_voxel_filter_settings_init(duet_voxel_filter_settings* settings) {
-  if (settings == nullptr) return;
-  const duet::VoxelFilterSettings c;
+void fill(const duet::VoxelFilterSettings& c, duet_voxel_filter_settings* settings) {
   settings->leaf_size_m = c.leaf_size_m;
   settings->min_points_per_voxel = c.min_points_per_voxel;
 }
 
-DUET_API void duet_normal_settings_init(duet_normal_settings* settings) {
-  if (settings == nullptr) return;
-  const duet::NormalSettings c;
+void fill(const duet::NormalSettings& c, duet_normal_settings* settings) {
   settings->k = c.k;
   for (int i = 0; i < 3; ++i) settings->viewpoint[i] = c.viewpoint[i];
 }
 
-DUET_API void duet_clustering_settings_init(duet_clustering_settings* settings) {
-  if (settings == nullptr) return;
-  *settings = to_c(duet::ClusteringSettings{});
-}
-
-DUET_API void duet_segmentation_settings_init(duet_segmentation_settings* settings) {
-  if (settings == nullptr) return;
-  const duet::SegmentationSettings c;
+void fill(const duet::SegmentationSettings& c, duet_segmentation_settings* settings) {
   settings->floor_z_m = c.floor_z_m;
   settings->max_floor_tilt_deg = c.max_floor_tilt_deg;
   settings->floor_height_threshold_m = c.floor_height_threshold_m;
@@ -158,9 +144,7 @@ DUET_API void duet_segmentation_settings_init(duet_segmentation_settings* settin
   settings->clustering = to_c(c.clustering);
 }
 
-DUET_API void duet_grid_update_settings_init(duet_grid_update_settings* settings) {
-  if (settings == nullptr) return;
-  const duet::GridUpdateSettings c;
+void fill(const duet::GridUpdateSettings& c, duet_grid_update_settings* settings) {
   settings->hit_logodds = c.hit_logodds;
   settings->miss_logodds = c.miss_logodds;
   settings->min_logodds = c.min_logodds;
@@ -170,9 +154,7 @@ DUET_API void duet_grid_update_settings_init(duet_grid_update_settings* settings
   settings->grow_margin_cells = c.grow_margin_cells;
 }
 
-DUET_API void duet_scan_match_settings_init(duet_scan_match_settings* settings) {
-  if (settings == nullptr) return;
-  const duet::ScanMatchSettings c;
+void fill(const duet::ScanMatchSettings& c, duet_scan_match_settings* settings) {
   settings->linear_window_m = c.linear_window_m;
   settings->angular_window_deg = c.angular_window_deg;
   settings->linear_step_m = c.linear_step_m;
@@ -185,12 +167,53 @@ DUET_API void duet_scan_match_settings_init(duet_scan_match_settings* settings) 
   settings->min_score = c.min_score;
 }
 
+}  // namespace duet::capi
+
+using namespace duet::capi;
+
+extern "C" {
+
+DUET_API void duet_back_projection_settings_init(duet_back_projection_settings* settings) {
+  if (settings == nullptr) return;
+  fill(default_profile().mapping.back_projection, settings);
+}
+
+DUET_API void duet_voxel_filter_settings_init(duet_voxel_filter_settings* settings) {
+  if (settings == nullptr) return;
+  fill(default_profile().mapping.voxel_filter, settings);
+}
+
+DUET_API void duet_normal_settings_init(duet_normal_settings* settings) {
+  if (settings == nullptr) return;
+  fill(default_profile().mapping.normals, settings);
+}
+
+DUET_API void duet_clustering_settings_init(duet_clustering_settings* settings) {
+  if (settings == nullptr) return;
+  *settings = to_c(duet::ClusteringSettings{});
+}
+
+DUET_API void duet_segmentation_settings_init(duet_segmentation_settings* settings) {
+  if (settings == nullptr) return;
+  fill(default_profile().mapping.segmentation, settings);
+}
+
+DUET_API void duet_grid_update_settings_init(duet_grid_update_settings* settings) {
+  if (settings == nullptr) return;
+  fill(default_profile().mapping.grid_update, settings);
+}
+
+DUET_API void duet_scan_match_settings_init(duet_scan_match_settings* settings) {
+  if (settings == nullptr) return;
+  fill(default_profile().runtime.pose_correction.match, settings);
+}
+
 DUET_API void duet_sensor_frame_init(duet_sensor_frame* frame) {
   if (frame == nullptr) return;
   const duet::SensorFrame c;
   frame->depth = nullptr;
-  frame->width = c.intrinsics.width;
-  frame->height = c.intrinsics.height;
+  frame->width = 0;  // to be set: a forgotten size is an error, never an over-read (issue 20)
+  frame->height = 0;
   frame->depth_row_stride = 0;
   frame->depth_format = DUET_DEPTH_U16;
   frame->depth_units_per_m = c.depth.depth_units_per_m;

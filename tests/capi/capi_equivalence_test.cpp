@@ -130,8 +130,8 @@ TEST(CapiSettings, InitFunctionsMirrorTheCppDefaults) {
   duet_sensor_frame f;
   duet_sensor_frame_init(&f);
   const duet::SensorFrame cf;
-  EXPECT_EQ(f.width, cf.intrinsics.width);
-  EXPECT_EQ(f.height, cf.intrinsics.height);
+  EXPECT_EQ(f.width, 0);  // the size must be set (issue 20: 640x480 was over-read when forgotten)
+  EXPECT_EQ(f.height, 0);
   EXPECT_EQ(f.fx, cf.intrinsics.fx);
   EXPECT_EQ(f.cy, cf.intrinsics.cy);
   EXPECT_EQ(f.depth_units_per_m, cf.depth.depth_units_per_m);

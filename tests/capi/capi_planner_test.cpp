@@ -7,6 +7,8 @@
 // codes without crashing (also run under AddressSanitizer).
 #include "capi_helpers.hpp"
 
+#include <duet/runtime/config/profile.hpp>
+
 #include <duet/kernels/dwa.hpp>
 #include <duet/kernels/exploration.hpp>
 #include <duet/kernels/frontier.hpp>
@@ -28,6 +30,16 @@
 #include <vector>
 
 using namespace duet_capi_test;
+
+namespace {
+
+/// The built-in dual profile: where the C API's defaults come from.
+const duet::Profile& dual_profile() {
+  static const duet::Profile p = duet::builtin_profile("dual");
+  return p;
+}
+
+}  // namespace
 
 namespace {
 
@@ -97,12 +109,12 @@ struct Reference {
   std::vector<duet::SensorSector> sensors = duet::paper_dual_sensors(30);
   Reference(const TestGrid& g, duet::ObservationBackend backend = duet::ObservationBackend::kDda)
       : model([&] {
-          duet::ObservationSettings os;
+          duet::ObservationSettings os = dual_profile().exploration.observation;
           os.backend = backend;
           return os;
         }()) {
     model.set_grid(g.view());
-    duet::inflate(g.view(), duet::InflationSettings{}, inflated);
+    duet::inflate(g.view(), dual_profile().exploration.inflation, inflated);
   }
 };
 
@@ -243,7 +255,8 @@ class PlannerTest : public DeviceTest {
 
 // ---- settings -------------------------------------------------------------------------------
 
-TEST(CapiPlannerSettings, InitFunctionsMirrorTheCppDefaults) {
+// The C defaults are the built-in dual profile's (the values duet explore and duet_runtime run with).
+TEST(CapiPlannerSettings, InitFunctionsMirrorTheBuiltInProfile) {
   duet_sensor_sector ss;
   duet_sensor_sector_init(&ss);
   const duet::SensorSector css;
@@ -271,7 +284,7 @@ TEST(CapiPlannerSettings, InitFunctionsMirrorTheCppDefaults) {
 
   duet_observation_settings os;
   duet_observation_settings_init(&os);
-  const duet::ObservationSettings cos;
+  const duet::ObservationSettings& cos = dual_profile().exploration.observation;
   EXPECT_EQ(os.thresholds.occupied_logodds, cos.thresholds.occupied_logodds);
   EXPECT_EQ(os.thresholds.free_logodds, cos.thresholds.free_logodds);
   EXPECT_EQ(static_cast<int>(os.backend), static_cast<int>(cos.backend));  // same numbering
@@ -279,7 +292,7 @@ TEST(CapiPlannerSettings, InitFunctionsMirrorTheCppDefaults) {
 
   duet_inflation_settings is;
   duet_inflation_settings_init(&is);
-  const duet::InflationSettings cis;
+  const duet::InflationSettings& cis = dual_profile().exploration.inflation;
   EXPECT_EQ(is.thresholds.occupied_logodds, cis.thresholds.occupied_logodds);
   EXPECT_EQ(is.thresholds.free_logodds, cis.thresholds.free_logodds);
   EXPECT_EQ(is.robot_radius_m, cis.robot_radius_m);
@@ -289,7 +302,7 @@ TEST(CapiPlannerSettings, InitFunctionsMirrorTheCppDefaults) {
 
   duet_path_settings ps;
   duet_path_settings_init(&ps);
-  const duet::PathSettings cps;
+  const duet::PathSettings& cps = dual_profile().exploration.path;
   EXPECT_EQ(ps.allow_diagonal, cps.allow_diagonal ? 1 : 0);
   EXPECT_EQ(ps.clearance_weight, cps.clearance_weight);
   EXPECT_EQ(ps.clearance_decay_m, cps.clearance_decay_m);
@@ -297,7 +310,7 @@ TEST(CapiPlannerSettings, InitFunctionsMirrorTheCppDefaults) {
 
   duet_frontier_settings fs;
   duet_frontier_settings_init(&fs);
-  const duet::FrontierSettings cfs;
+  const duet::FrontierSettings& cfs = dual_profile().exploration.strategy.frontier;
   EXPECT_EQ(fs.min_cluster_cells, cfs.min_cluster_cells);
   EXPECT_EQ(fs.min_goal_distance_m, cfs.min_goal_distance_m);
   EXPECT_EQ(fs.blacklist_radius_m, cfs.blacklist_radius_m);
@@ -306,7 +319,7 @@ TEST(CapiPlannerSettings, InitFunctionsMirrorTheCppDefaults) {
 
   duet_partial_sim_settings sim;
   duet_partial_sim_settings_init(&sim);
-  const duet::PartialSimSettings csim;
+  const duet::PartialSimSettings& csim = dual_profile().exploration.strategy.simulation;
   EXPECT_EQ(sim.iterations, csim.iterations);
   EXPECT_EQ(sim.particles, csim.particles);
   EXPECT_EQ(sim.phi_a, csim.phi_a);
@@ -333,7 +346,7 @@ TEST(CapiPlannerSettings, InitFunctionsMirrorTheCppDefaults) {
 
   duet_exploration_settings es;
   duet_exploration_settings_init(&es);
-  const duet::ExplorationSettings ces;
+  const duet::ExplorationSettings& ces = dual_profile().exploration.strategy;
   EXPECT_EQ(es.eps_r_bits, ces.eps_r_bits);
   EXPECT_EQ(es.use_simulation, ces.use_simulation ? 1 : 0);
   EXPECT_EQ(es.simulation.particles, ces.simulation.particles);
@@ -344,7 +357,7 @@ TEST(CapiPlannerSettings, InitFunctionsMirrorTheCppDefaults) {
 
   duet_dwa_settings ds;
   duet_dwa_settings_init(&ds);
-  const duet::DwaSettings cds;
+  const duet::DwaSettings& cds = dual_profile().exploration.dwa;
   EXPECT_EQ(ds.limits.max_v_mps, cds.limits.max_v_mps);
   EXPECT_EQ(ds.limits.min_v_mps, cds.limits.min_v_mps);
   EXPECT_EQ(ds.limits.max_omega_rps, cds.limits.max_omega_rps);
@@ -529,7 +542,7 @@ TEST_F(PlannerTest, SimulateEqualsTheKernelBitwise) {
     for (const float theta : {3.14159f, 0.3f}) {
       SCOPED_TRACE("seed " + std::to_string(seed) + " theta " + std::to_string(theta));
       const duet::Pose2 robot{2.0f, 5.0f, theta};
-      duet::PartialSimSettings cs;
+      duet::PartialSimSettings cs = dual_profile().exploration.strategy.simulation;
       cs.seed = seed;
       duet::PartialSimWorkspace ws;
       const duet::PartialSimResult r = duet::partial_map_simulation(ref.model, ref.inflated, robot, ref.sensors, cs, ws);
@@ -569,7 +582,7 @@ TEST_F(PlannerTest, FrontierSearchAndBlacklistEqualTheKernel) {
     for (int round = 0; round < 3; ++round) {
       SCOPED_TRACE("round " + std::to_string(round));
       duet::FrontierWorkspace ws;
-      const duet::FrontierResult r = duet::find_frontier(ref.inflated, robot, bl, 10.0, duet::FrontierSettings{}, ws);
+      const duet::FrontierResult r = duet::find_frontier(ref.inflated, robot, bl, 10.0, dual_profile().exploration.strategy.frontier, ws);
       duet_frontier_result out;
       std::vector<float> path(2 * (r.path.size() + 3), -9.0f);
       std::vector<duet_frontier_cluster> clusters(r.clusters.size() + 2);
@@ -636,7 +649,7 @@ TEST_F(PlannerTest, DecideEqualsTheKernel) {
   for (int use_sim = 1; use_sim >= 0; --use_sim) {
     for (const float eps : {1.0f, 1e6f}) {  // 1e6: the frontier search decides
       SCOPED_TRACE("use_simulation " + std::to_string(use_sim) + " eps " + std::to_string(eps));
-      duet::ExplorationSettings cs;
+      duet::ExplorationSettings cs = dual_profile().exploration.strategy;
       cs.use_simulation = use_sim != 0;
       cs.eps_r_bits = eps;
       const duet::Pose2 robot{2.0f, 5.0f, 3.14159f};
@@ -688,7 +701,7 @@ TEST_F(PlannerTest, PlanPathEqualsTheKernel) {
                                                                           {{2.0f, 5.0f}, {7.0f, 5.0f}},
                                                                           {{2.0f, 5.0f}, {20.0f, 5.0f}}};
     for (const float tolerance : {0.0f, 0.3f}) {
-      duet::PathSettings cs;
+      duet::PathSettings cs = dual_profile().exploration.path;
       cs.goal_tolerance_m = tolerance;
       duet_path_settings s;
       duet_path_settings_init(&s);
@@ -724,7 +737,7 @@ TEST_F(PlannerTest, DwaStepsEqualTheKernelAndKeepState) {
   const Reference ref(g);
   set_grid(planner_, g);
   duet::PathWorkspace pws;
-  const duet::PathResult path = duet::plan_path(ref.inflated, {2.0f, 5.0f}, {4.5f, 3.8f}, duet::PathSettings{}, pws);
+  const duet::PathResult path = duet::plan_path(ref.inflated, {2.0f, 5.0f}, {4.5f, 3.8f}, dual_profile().exploration.path, pws);
   ASSERT_EQ(path.status, duet::PathStatus::kFound);
   // The path as a strided record array (x, y, something else).
   struct Waypoint {
@@ -733,7 +746,7 @@ TEST_F(PlannerTest, DwaStepsEqualTheKernelAndKeepState) {
   std::vector<Waypoint> rec;
   for (const auto& p : path.waypoints) rec.push_back({p.x(), p.y(), 1234.0f});
 
-  duet::DwaSettings cs;
+  duet::DwaSettings cs = dual_profile().exploration.dwa;
   cs.oscillation_window_calls = 5;  // exercise the state between calls
   duet_dwa_settings s;
   duet_dwa_settings_init(&s);
@@ -787,7 +800,7 @@ TEST_F(PlannerTest, ReadBacksEqualTheKernel) {
   is.unknown_is_obstacle = 1;
   is.uncertain_is_obstacle = 0;
   set_grid(planner_, g, nullptr, &is);
-  duet::InflationSettings cis;
+  duet::InflationSettings cis = dual_profile().exploration.inflation;
   cis.robot_radius_m = 0.25f;
   cis.unknown_is_obstacle = true;
   cis.uncertain_is_obstacle = false;
