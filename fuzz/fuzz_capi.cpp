@@ -570,6 +570,8 @@ void step(State& st, Bytes& in) {
             im.color_bgr = in.get<std::uint8_t>() & 1;
             im.color_row_stride = in.get<std::uint8_t>() % 3 ? 0 : static_cast<std::size_t>(in.range(0, 48));
           }
+          const float k[4] = {in.value(10.0f), in.value(10.0f), in.value(8.0f), in.value(6.0f)};
+          if (in.get<std::uint8_t>() % 4 == 0) im.intrinsics = k;
           duet_runtime_push_rgbd(r, static_cast<std::size_t>(in.range(0, 2)), in.get<std::uint8_t>() % 16 ? &im : nullptr);
           break;
         }

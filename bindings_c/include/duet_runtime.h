@@ -135,10 +135,15 @@ typedef struct duet_rgbd_image {
   size_t color_row_stride;             /* bytes between rows, 0 = packed */
   int color_channels;                  /* 3 or 4 */
   int color_bgr;                       /* 1 = B,G,R order (OpenCV), 0 = R,G,B */
+  const float* intrinsics;             /* NULL = the sensor's (profile); else this frame's fx, fy, cx, cy
+                                        * [px] (fx, fy > 0; cx in [0, width], cy in [0, height]), used to
+                                        * back-project this frame (the planner's fans stay the profile's;
+                                        * recordings keep the profile's) */
 } duet_rgbd_image;
 
 /* Fills *image with: stamp NaN, no buffers, size 0 x 0 (set all three: a forgotten size is an
- * error, never an over-read), DUET_DEPTH_U16 at 1000 units/m, 3 channels RGB. Thread-safe. */
+ * error, never an over-read), DUET_DEPTH_U16 at 1000 units/m, 3 channels RGB, the sensor's
+ * intrinsics (NULL). Thread-safe. */
 DUET_API void duet_rgbd_image_init(duet_rgbd_image* image);
 
 /* Queues a frame of sensor `sensor` (0-based, the profile's order). Depth in other units than

@@ -90,6 +90,15 @@ void convert(const duet_rgbd_image& in, const SensorProfile& sensor, RgbdImage& 
       }
     }
   }
+  out.intrinsics.reset();
+  if (in.intrinsics != nullptr) {
+    const float fx = in.intrinsics[0], fy = in.intrinsics[1], cx = in.intrinsics[2], cy = in.intrinsics[3];
+    if (!(std::isfinite(fx) && std::isfinite(fy) && fx > 0.0f && fy > 0.0f && fx <= 1e6f && fy <= 1e6f && cx >= 0.0f &&
+          cx <= static_cast<float>(w) && cy >= 0.0f && cy <= static_cast<float>(h)))
+      invalid_argument("image->intrinsics (" + std::to_string(fx) + ", " + std::to_string(fy) + ", " + std::to_string(cx) + ", " +
+                       std::to_string(cy) + "): fx, fy must be in (0, 1e6], cx in [0, width], cy in [0, height]");
+    out.intrinsics = PinholeIntrinsics{w, h, fx, fy, cx, cy};
+  }
   if (in.color == nullptr) {
     out.rgb.clear();
     return;

@@ -244,9 +244,10 @@ class Runtime(_Handle):
         self._check()
 
     # -- input
-    def push_rgbd(self, sensor, stamp_s, depth, rgb=None, depth_units_per_m=None):
+    def push_rgbd(self, sensor, stamp_s, depth, rgb=None, depth_units_per_m=None, intrinsics=None):
         """depth: (H, W) uint16 (in depth_units_per_m, default the sensor's) or float32 metres;
-        rgb: (H, W, 3) or (H, W, 4) uint8 R, G, B(, A), or None. Copied by the call."""
+        rgb: (H, W, 3) or (H, W, 4) uint8 R, G, B(, A), or None; intrinsics: this frame's
+        (fx, fy, cx, cy) or None for the sensor's. Copied by the call."""
         depth = np.asarray(depth)
         if depth.ndim != 2 or depth.dtype not in (np.uint16, np.float32):
             raise ValueError(f"depth must be a 2D uint16 or float32 array, got {depth.dtype} {depth.shape}")
@@ -267,6 +268,9 @@ class Runtime(_Handle):
             im.color = rgb.ctypes.data
             im.color_row_stride = rgb.strides[0]
             im.color_channels = rgb.shape[2]
+        if intrinsics is not None:
+            k = (ctypes.c_float * 4)(*[float(v) for v in intrinsics])
+            im.intrinsics = ctypes.cast(k, ctypes.POINTER(ctypes.c_float))
         _c.lib.duet_runtime_push_rgbd(self.handle, sensor, ctypes.byref(im))
         self._check()
 

@@ -25,7 +25,7 @@ class RgbdImage(Structure):  # duet_rgbd_image
     _fields_ = [("stamp_s", c_double), ("depth", c_void_p), ("width", c_int), ("height", c_int),
                 ("depth_row_stride", c_size_t), ("depth_format", c_int), ("depth_units_per_m", c_float),
                 ("color", c_void_p), ("color_row_stride", c_size_t), ("color_channels", c_int),
-                ("color_bgr", c_int)]
+                ("color_bgr", c_int), ("intrinsics", POINTER(c_float))]
 
 
 class SensorInfo(Structure):  # duet_runtime_sensor_info

@@ -325,6 +325,66 @@ TEST_F(CapiRuntime, DepthInOtherUnitsAndFloatMetresMapsTheSame) {
   EXPECT_EQ(known[2], known[0]);
 }
 
+TEST_F(CapiRuntime, PerFrameIntrinsicsBackProjectThatFrame) {
+  // A wall 2 m ahead seen through the profile's intrinsics and through twice its focal length:
+  // the same pixels span half the width.
+  std::vector<uint16_t> mm(640 * 480, 2000);
+  auto spread = [&](const float* intrinsics) {
+    const char* sets[] = {"runtime.sensor_rate_hz=1"};
+    duet_runtime rt = duet_runtime_new(device_, DUET_PROFILE_NAME_OR_FILE, "single", sets, 1, 1);
+    duet_runtime_set_time_origin(rt, 0.0);
+    for (int k = 0; k <= 50; ++k) duet_runtime_push_odometry(rt, 0.02 * k, duet_pose2{0, 0, 0}, duet_twist{0, 0});
+    duet_rgbd_image im;
+    duet_rgbd_image_init(&im);
+    EXPECT_EQ(im.intrinsics, nullptr);
+    im.stamp_s = 0.5;
+    im.width = 640;
+    im.height = 480;
+    im.depth = mm.data();
+    im.intrinsics = intrinsics;
+    duet_runtime_push_rgbd(rt, 0, &im);
+    for (int k = 1; k <= 20; ++k) duet_runtime_spin_once(rt, 0.05 * k);
+    duet_cloud c = duet_runtime_get_cloud(rt);
+    const size_t n = duet_cloud_get_size(c);
+    std::vector<float> xyz(3 * n);
+    duet_cloud_copy_points(c, xyz.data(), 0, n);
+    float lo = 1e9f, hi = -1e9f;
+    for (size_t i = 0; i < n; ++i) {
+      lo = std::min(lo, xyz[3 * i + 1]);
+      hi = std::max(hi, xyz[3 * i + 1]);
+    }
+    duet_cloud_release(c);
+    duet_runtime_release(rt);
+    return n ? hi - lo : 0.0f;
+  };
+  duet_runtime_sensor_info info;
+  {
+    duet_runtime rt = duet_runtime_new(device_, DUET_PROFILE_NAME_OR_FILE, "single", nullptr, 0, 1);
+    duet_runtime_get_sensor_info(rt, 0, &info);
+    duet_runtime_release(rt);
+  }
+  const float own = spread(nullptr);
+  const float twice[4] = {2.0f * info.fx, 2.0f * info.fy, info.cx, info.cy};
+  const float narrow = spread(twice);
+  ASSERT_EQ(take(), DUET_ERROR_NONE) << message();
+  EXPECT_GT(own, 1.5f);
+  EXPECT_NEAR(narrow, own / 2.0f, 0.1f * own);
+  // Invalid intrinsics: an error naming them.
+  duet_runtime rt = duet_runtime_new(device_, DUET_PROFILE_NAME_OR_FILE, "single", nullptr, 0, 1);
+  duet_rgbd_image im;
+  duet_rgbd_image_init(&im);
+  im.stamp_s = 1.0;
+  im.width = 640;
+  im.height = 480;
+  im.depth = mm.data();
+  const float bad[4] = {-1.0f, 500.0f, 320.0f, 240.0f};
+  im.intrinsics = bad;
+  duet_runtime_push_rgbd(rt, 0, &im);
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(message().find("intrinsics"), std::string::npos) << message();
+  duet_runtime_release(rt);
+}
+
 TEST_F(CapiRuntime, EventsReachTheCallback) {
   Loop loop(device_, "lab", {});
   ASSERT_TRUE(loop.ok()) << message();

@@ -38,7 +38,7 @@ SensorFrame frame_view(const RgbdImage& image, const SensorProfile& sensor, cons
   f.color.row_stride_bytes = 0;
   f.color.channels = 3;
   f.color.bgr = false;
-  f.intrinsics = in;
+  f.intrinsics = image.intrinsics.value_or(in);
   f.T_robot_camera = T_robot_optical;
   return f;
 }

@@ -15,6 +15,7 @@
 #include <Eigen/Geometry>
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace duet {
@@ -26,6 +27,10 @@ struct RgbdImage {
   int height = 0;
   std::vector<std::uint16_t> depth;  ///< width * height raw depth units, row-major; 0 = no return
   std::vector<std::uint8_t> rgb;     ///< width * height * 3, R G B; empty = no colour
+  /// This frame's own pinhole intrinsics (a camera that reports them per frame; the size must be
+  /// the sensor's); nullopt: the sensor's from the profile. Used to back-project this frame; the
+  /// planner's sensor fans stay the profile's.
+  std::optional<PinholeIntrinsics> intrinsics;
 };
 
 /// The views of `image` the mapper takes (DepthImageView kU16 in sensor.depth_units_per_m,
