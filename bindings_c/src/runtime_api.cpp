@@ -141,7 +141,7 @@ DUET_API duet_runtime duet_runtime_new(duet_device device, enum duet_profile_kin
   if (!d) return nullptr;
   duet_runtime result = nullptr;
   guarded(d.get(), fn, [&] {
-    auto r = std::make_shared<Runtime>(d, c_profile(kind, profile, sets, set_count, seed));
+    auto r = std::make_shared<Runtime>(d, c_profile(enum_value(kind), profile, sets, set_count, seed));
     r->parent = d->key;
     result = to_handle<duet_runtime>(register_object(std::move(r)));
   });
@@ -155,7 +155,7 @@ DUET_API void duet_profile_settings_load(duet_device device, enum duet_profile_k
   if (!d) return;
   guarded(d.get(), fn, [&] {
     check_not_null(out, "out");
-    const duet::Profile p = c_profile(kind, profile, sets, set_count, 0);
+    const duet::Profile p = c_profile(enum_value(kind), profile, sets, set_count, 0);
     duet_profile_settings r{};
     r.grid_resolution_m = p.mapping.grid_resolution_m;
     fill(p.mapping.back_projection, &r.back_projection);

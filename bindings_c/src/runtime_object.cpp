@@ -22,7 +22,7 @@ duet_explorer_state to_c(ExplorerState s) {
 
 }  // namespace
 
-Profile c_profile(duet_profile_kind kind, const char* profile, const char* const* sets, std::size_t set_count, std::uint64_t seed) {
+Profile c_profile(int kind, const char* profile, const char* const* sets, std::size_t set_count, std::uint64_t seed) {
   check_not_null(profile, "profile");
   if (set_count > 0) check_not_null(sets, "sets");
   if (set_count > 10000) invalid_argument("set_count is " + std::to_string(set_count) + " (at most 10000)");
@@ -32,10 +32,10 @@ Profile c_profile(duet_profile_kind kind, const char* profile, const char* const
     overlays.push_back(set_overlay(sets[i]));
   }
   Profile p;
-  switch (enum_value(kind)) {
+  switch (kind) {
     case DUET_PROFILE_NAME_OR_FILE: p = resolve_profile(profile, overlays); break;
     case DUET_PROFILE_YAML_TEXT: p = parse_profile(profile, "<profile text>", overlays); break;
-    default: invalid_argument("kind is " + std::to_string(enum_value(kind)) + " (expected DUET_PROFILE_NAME_OR_FILE or DUET_PROFILE_YAML_TEXT)");
+    default: invalid_argument("kind is " + std::to_string(kind) + " (expected DUET_PROFILE_NAME_OR_FILE or DUET_PROFILE_YAML_TEXT)");
   }
   return seed != 0 ? with_run_seed(std::move(p), seed) : p;
 }

@@ -24,7 +24,7 @@
 namespace duet::capi {
 
 /// Profile from the C arguments (duet_runtime_new, duet_sim_new): kind, text or name, overrides, run seed.
-Profile c_profile(duet_profile_kind kind, const char* profile, const char* const* sets, std::size_t set_count, std::uint64_t seed);
+Profile c_profile(int kind, const char* profile, const char* const* sets, std::size_t set_count, std::uint64_t seed);
 
 /// What one control period published.
 struct Published {

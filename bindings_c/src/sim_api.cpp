@@ -68,7 +68,7 @@ DUET_API duet_sim duet_sim_new(duet_device device, const char* world, enum duet_
   duet_sim result = nullptr;
   guarded(d.get(), fn, [&] {
     check_not_null(world, "world");
-    duet::Profile p = c_profile(kind, profile, sets, set_count, 0);
+    duet::Profile p = c_profile(enum_value(kind), profile, sets, set_count, 0);
     duet::sim::World w = duet::sim::resolve_world(world);
     duet::sim::validate(w, w.source.empty() ? world : w.source);
     std::shared_ptr<Sim> s;

@@ -45,10 +45,10 @@ struct Recorded {
   sim::ExploreSummary summary;
 };
 
-Recorded record_lab(const std::filesystem::path& dir, std::vector<std::string> faults = {}) {
+Recorded record_lab(const std::filesystem::path& dir, std::vector<std::string> faults = {}, double seconds = 8.0) {
   sim::ExploreSettings s;
   s.seed = 3;
-  s.max_time_s = 8.0;
+  s.max_time_s = seconds;
   s.record_dir = dir.string();
   s.faults = std::move(faults);
   sim::SimExplore run(sim::builtin_world("lab"), builtin_profile("dual"), s);
@@ -150,7 +150,7 @@ TEST(Recording, TheRecorderRefusesAFolderInUseAndCountsDrops) {
 
 class MalformedRecording : public ::testing::Test {
  protected:
-  void SetUp() override { (void)record_lab(tmp_ / "rec"); }
+  void SetUp() override { (void)record_lab(tmp_ / "rec", {}, 4.0); }
   std::filesystem::path dir() const { return tmp_ / "rec"; }
   void replace_line(const std::filesystem::path& file, int line, const std::string& text) {
     std::istringstream in(read_text(file));
