@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstring>
 #include <vector>
 
 namespace {
@@ -555,9 +556,10 @@ void step(State& st, Bytes& in) {
           im.stamp_s = in.value(100.0f);
           im.width = in.get<std::uint8_t>() % 4 ? 8 : static_cast<int>(in.range(-2, 12));
           im.height = in.get<std::uint8_t>() % 4 ? 6 : static_cast<int>(in.range(-2, 12));
-          im.depth_format = static_cast<duet_depth_format>(in.range(0, 2));
+          const int fmt = static_cast<int>(in.range(0, 2));  // 2: not a format (never loaded as the enum here)
+          std::memcpy(&im.depth_format, &fmt, sizeof fmt);
           im.depth_units_per_m = in.get<std::uint8_t>() % 3 ? 1000.0f : in.value(5000.0f);
-          const std::size_t px = im.depth_format == DUET_DEPTH_U16 ? 2 : 4;
+          const std::size_t px = fmt == DUET_DEPTH_U16 ? 2 : 4;
           im.depth_row_stride = stride(in, px * 8);
           const std::size_t rows = 12, row_bytes = std::max<std::size_t>(stored(im.depth_row_stride, px * 8), px * 12);
           std::vector<float> depth((rows * row_bytes) / 4 + 4);
