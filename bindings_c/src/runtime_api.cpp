@@ -23,28 +23,6 @@ void with_runtime(duet_runtime handle, const char* fn, F&& body) noexcept {
   guarded(r->device.get(), fn, [&] { body(*r); });
 }
 
-const SensorProfile& sensor_of(const Profile& p, std::size_t i) {
-  if (i >= p.sensors.size())
-    invalid_argument("sensor " + std::to_string(i) + " out of range (the profile has " + std::to_string(p.sensors.size()) + " sensors)");
-  return p.sensors[i];
-}
-
-duet_runtime_sensor_info sensor_info(const Profile& p, std::size_t i) {
-  const SensorProfile& s = sensor_of(p, i);
-  duet_runtime_sensor_info out{};
-  out.width = s.intrinsics.width;
-  out.height = s.intrinsics.height;
-  out.fx = s.intrinsics.fx;
-  out.fy = s.intrinsics.fy;
-  out.cx = s.intrinsics.cx;
-  out.cy = s.intrinsics.cy;
-  out.depth_units_per_m = s.depth_units_per_m;
-  out.rate_hz = static_cast<float>(p.runtime.sensor_rate_hz);
-  const Eigen::Matrix4f T = s.T_robot_optical().matrix();
-  std::memcpy(out.T_robot_optical, T.data(), sizeof out.T_robot_optical);
-  return out;
-}
-
 /// The caller's frame as the runtime's RgbdImage (depth converted to the sensor's units).
 void convert(const duet_rgbd_image& in, const SensorProfile& sensor, RgbdImage& out) {
   const int w = sensor.intrinsics.width, h = sensor.intrinsics.height;

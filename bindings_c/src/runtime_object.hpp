@@ -26,6 +26,11 @@ namespace duet::capi {
 /// Profile from the C arguments (duet_runtime_new, duet_sim_new): kind, text or name, overrides, run seed.
 Profile c_profile(int kind, const char* profile, const char* const* sets, std::size_t set_count, std::uint64_t seed);
 
+/// Sensor i of a profile; throws ApiError(INVALID_ARGUMENT) naming the count when out of range.
+const SensorProfile& sensor_of(const Profile& p, std::size_t i);
+/// What the runtime (and the simulator) expect of sensor i: size, intrinsics, units, rate, mount.
+duet_runtime_sensor_info sensor_info(const Profile& p, std::size_t i);
+
 /// What one control period published.
 struct Published {
   duet_runtime_status status{};

@@ -121,20 +121,7 @@ DUET_API size_t duet_sim_get_sensor_count(duet_sim sim) {
 DUET_API void duet_sim_get_sensor_info(duet_sim sim, size_t sensor, duet_runtime_sensor_info* out) {
   with_sim(sim, "duet_sim_get_sensor_info", [&](Sim& s) {
     check_not_null(out, "out");
-    if (sensor >= s.profile.sensors.size())
-      invalid_argument("sensor " + std::to_string(sensor) + " out of range (" + std::to_string(s.profile.sensors.size()) + " sensors)");
-    const duet::SensorProfile& sp = s.profile.sensors[sensor];
-    *out = duet_runtime_sensor_info{};
-    out->width = sp.intrinsics.width;
-    out->height = sp.intrinsics.height;
-    out->fx = sp.intrinsics.fx;
-    out->fy = sp.intrinsics.fy;
-    out->cx = sp.intrinsics.cx;
-    out->cy = sp.intrinsics.cy;
-    out->depth_units_per_m = sp.depth_units_per_m;
-    out->rate_hz = static_cast<float>(s.profile.runtime.sensor_rate_hz);
-    const Eigen::Matrix4f T = sp.T_robot_optical().matrix();
-    std::memcpy(out->T_robot_optical, T.data(), sizeof out->T_robot_optical);
+    *out = sensor_info(s.profile, sensor);
   });
 }
 
