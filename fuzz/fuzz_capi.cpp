@@ -578,6 +578,7 @@ void step(State& st, Bytes& in) {
           break;
         }
         case 2:
+          if (in.get<std::uint8_t>() & 1) duet_runtime_push_gyro(r, in.value(100.0f), in.value(2.0f));
           duet_runtime_push_odometry(r, in.value(100.0f), pose(in, 5.0f), duet_twist{in.value(2.0f), in.value(2.0f)});
           break;
         case 3:

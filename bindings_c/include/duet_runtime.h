@@ -159,6 +159,16 @@ DUET_API void duet_runtime_push_rgbd(duet_runtime runtime, size_t sensor, const 
  * drops; a pose jump no chassis makes is absorbed (counted). Any thread. */
 DUET_API void duet_runtime_push_odometry(duet_runtime runtime, double stamp_s, duet_pose2 pose, duet_twist twist);
 
+/* Queues a gyro sample: the yaw rate [rad/s, counter-clockwise] measured up to stamp_s (your
+ * clock). From the first sample on, the odometry the runtime takes gets its heading from the
+ * gyro and its distance from the wheels (what a Kobuki's firmware does; it keeps the heading
+ * when the wheels slip): each wheel message's heading change is the gyro's integral since the
+ * previous message (a sample's rate holds back to the sample before; a gyro lagging the wheels by
+ * up to 50 ms has its last rate held). A step the gyro does not cover keeps the wheels' change
+ * (counted: gyro_gaps). Non-finite values and stamps not after the previous sample are counted
+ * drops (gyro_invalid). Push the gyro at least as fast as the odometry. Any thread. */
+DUET_API void duet_runtime_push_gyro(duet_runtime runtime, double stamp_s, float yaw_rate_rps);
+
 /* ---- running ----------------------------------------------------------------------------- */
 
 /* One control period at `now_s` on your clock (non-decreasing; a time before the last is
@@ -294,6 +304,9 @@ typedef struct duet_runtime_stats {
   uint64_t control_periods;       /* ticks run */
   uint64_t frames_recorded;       /* duet_runtime_record(): frames written */
   uint64_t frames_record_dropped; /* ... dropped (the disk was slower than the sensors) */
+  uint64_t gyro_pushed;           /* gyro samples pushed */
+  uint64_t gyro_invalid;          /* ... dropped: non-finite, or a stamp not after the previous */
+  uint64_t gyro_gaps;             /* odometry steps the gyro did not cover: the wheels' heading kept */
 } duet_runtime_stats;
 
 DUET_API void duet_runtime_get_stats(duet_runtime runtime, duet_runtime_stats* out);

@@ -227,6 +227,14 @@ DUET_API void duet_runtime_push_odometry(duet_runtime runtime, double stamp_s, d
   });
 }
 
+DUET_API void duet_runtime_push_gyro(duet_runtime runtime, double stamp_s, float yaw_rate_rps) {
+  with_runtime(runtime, "duet_runtime_push_gyro", [&](Runtime& r) {
+    if (r.paused.load()) return;  // the odometry is dropped meanwhile too
+    r.ensure_origin(stamp_s);
+    r.robot.push_gyro(stamp_s, yaw_rate_rps);  // non-finite values: counted drops
+  });
+}
+
 DUET_API void duet_runtime_spin_once(duet_runtime runtime, double now_s) {
   auto r = resolve<Runtime>(runtime, "duet_runtime_spin_once", "runtime");
   if (!r) return;
@@ -420,6 +428,9 @@ DUET_API void duet_runtime_get_stats(duet_runtime runtime, duet_runtime_stats* o
     s.control_periods = r.published.control_periods;
     s.frames_recorded = r.published.recorded.frames_recorded;
     s.frames_record_dropped = r.published.recorded.frames_dropped;
+    s.gyro_pushed = ps.gyro_pushed;
+    s.gyro_invalid = ps.gyro_invalid;
+    s.gyro_gaps = ps.gyro_gaps;
     *out = s;
   });
 }

@@ -279,6 +279,11 @@ class Runtime(_Handle):
         _c.lib.duet_runtime_push_odometry(self.handle, stamp_s, _c.Pose2(*pose), _c.Twist(*twist))
         self._check()
 
+    def push_gyro(self, stamp_s, yaw_rate_rps):
+        """A gyro sample: from the first on, the odometry's heading comes from the gyro."""
+        _c.lib.duet_runtime_push_gyro(self.handle, stamp_s, yaw_rate_rps)
+        self._check()
+
     # -- running
     def spin_once(self, now_s):
         _c.lib.duet_runtime_spin_once(self.handle, now_s)

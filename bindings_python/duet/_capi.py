@@ -45,7 +45,7 @@ _STATS_FIELDS = ["frames_pushed", "frames_queue_overflow", "frames_paused", "odo
                  "frames_garbled", "frames_dropped_sync", "odometry_invalid", "odometry_out_of_order",
                  "odometry_jumps", "clock_restarts", "sensor_silences", "sets_integrated", "blind_periods",
                  "relocalizations", "loop_closures", "control_periods", "frames_recorded",
-                 "frames_record_dropped"]
+                 "frames_record_dropped", "gyro_pushed", "gyro_invalid", "gyro_gaps"]
 
 
 class RuntimeStats(Structure):  # duet_runtime_stats
@@ -137,6 +137,7 @@ _proto("duet_runtime_set_time_origin", None, H, c_double)
 _proto("duet_rgbd_image_init", None, POINTER(RgbdImage))
 _proto("duet_runtime_push_rgbd", None, H, c_size_t, POINTER(RgbdImage))
 _proto("duet_runtime_push_odometry", None, H, c_double, Pose2, Twist)
+_proto("duet_runtime_push_gyro", None, H, c_double, c_float)
 _proto("duet_runtime_spin_once", None, H, c_double)
 _proto("duet_time_now", c_double)
 _proto("duet_runtime_start", None, H, c_void_p, c_void_p)

@@ -103,3 +103,90 @@ TEST(PushRobot, PushesFromSeveralThreadsAreAllCounted) {
 
 }  // namespace
 }  // namespace duet
+
+namespace duet {
+namespace {
+
+/// A robot turning on the spot at 0.5 rad/s then driving a quarter circle; its wheels slip so
+/// that they report 1.3x the heading change (and the true distance). Odometry at 50 Hz, gyro
+/// at 100 Hz (true rate, lagging by `lag` s).
+struct Drive {
+  std::vector<OdometryMsg> wheels;
+  std::vector<std::pair<double, float>> gyro;
+  std::vector<Pose2> truth;  ///< at each wheel message
+};
+
+Drive drive(double lag) {
+  Drive d;
+  Pose2 truth{}, wheel{};
+  const double dt = 0.002;
+  for (int k = 0; k <= 2000; ++k) {  // 4 s
+    const double t = k * dt;
+    const float v = t < 2.0 ? 0.0f : 0.3f, w = 0.5f;
+    if (k > 0) {
+      truth = Pose2{truth.x + v * static_cast<float>(dt) * std::cos(truth.theta), truth.y + v * static_cast<float>(dt) * std::sin(truth.theta),
+                    truth.theta + w * static_cast<float>(dt)};
+      wheel = Pose2{wheel.x + v * static_cast<float>(dt) * std::cos(wheel.theta), wheel.y + v * static_cast<float>(dt) * std::sin(wheel.theta),
+                    wheel.theta + 1.3f * w * static_cast<float>(dt)};
+    }
+    if (k % 10 == 0) {
+      d.wheels.push_back(OdometryMsg{t, wheel, Twist{v, 1.3f * w}});
+      d.truth.push_back(truth);
+    }
+    if (k % 5 == 0) d.gyro.emplace_back(t - lag, w);
+  }
+  return d;
+}
+
+TEST(PushRobotGyro, TheHeadingComesFromTheGyroAndTheDistanceFromTheWheels) {
+  for (const double lag : {0.0, 0.01}) {
+    SCOPED_TRACE(lag);
+    const Drive d = drive(lag);
+    PushRobot r(1);
+    std::vector<OdometryMsg> out;
+    std::size_t g = 0;
+    for (const OdometryMsg& m : d.wheels) {  // pushed as drivers would, taken every 50 ms
+      while (g < d.gyro.size() && d.gyro[g].first <= m.stamp_s) {
+        r.push_gyro(d.gyro[g].first, d.gyro[g].second);
+        ++g;
+      }
+      r.push_odometry(m);
+      auto taken = r.chassis().take_odometry();
+      out.insert(out.end(), taken.begin(), taken.end());
+    }
+    ASSERT_EQ(out.size(), d.wheels.size());
+    const Pose2& end = out.back().pose;
+    const Pose2& truth = d.truth.back();
+    EXPECT_NEAR(std::remainder(end.theta - truth.theta, 6.2831853f), 0.0f, 0.02f);
+    EXPECT_NEAR(end.x, truth.x, 0.03f);
+    EXPECT_NEAR(end.y, truth.y, 0.03f);
+    EXPECT_NEAR(out.back().twist.omega, 0.5f, 1e-3f);  // the gyro's rate
+    // The wheels alone are 30 % off in heading.
+    EXPECT_GT(std::abs(std::remainder(d.wheels.back().pose.theta - truth.theta, 6.2831853f)), 0.5f);
+    EXPECT_EQ(r.stats().gyro_gaps, 0u);
+  }
+}
+
+TEST(PushRobotGyro, WithoutTheGyroTheWheelsAreKeptAndGapsAreCounted) {
+  const Drive d = drive(0.0);
+  PushRobot r(1);
+  for (const OdometryMsg& m : d.wheels) r.push_odometry(m);
+  const auto raw = r.chassis().take_odometry();
+  ASSERT_EQ(raw.size(), d.wheels.size());
+  EXPECT_EQ(raw.back().pose.theta, d.wheels.back().pose.theta);  // no gyro: untouched
+  // A gyro that stops: the steps it does not cover keep the wheels' change, counted.
+  PushRobot r2(1);
+  for (std::size_t i = 0; i < d.wheels.size(); ++i) {
+    if (d.wheels[i].stamp_s < 1.0) r2.push_gyro(d.wheels[i].stamp_s, 0.5f);
+    r2.push_odometry(d.wheels[i]);
+    (void)r2.chassis().take_odometry();
+  }
+  EXPECT_GT(r2.stats().gyro_gaps, 100u);
+  r2.push_gyro(std::nan(""), 1.0f);
+  r2.push_gyro(0.5, 1.0f);  // before the last sample
+  (void)r2.chassis().take_odometry();
+  EXPECT_EQ(r2.stats().gyro_invalid, 2u);
+}
+
+}  // namespace
+}  // namespace duet

@@ -14,6 +14,12 @@
 /// odometry queue odometry_queue messages; when a push finds the queue full, the oldest entry is
 /// dropped and counted (PushStats) - a runtime that does not tick cannot grow the memory.
 ///
+/// Gyro: when yaw-rate samples are pushed (push_gyro), the odometry the runtime takes gets its
+/// heading from the gyro and its distance from the wheels - what a Kobuki's firmware does, and
+/// what keeps the heading when the wheels slip. Each wheel message's heading change is the gyro's
+/// integral over the time since the previous message (each sample holds its rate back to the
+/// sample before); a step the gyro does not cover keeps the wheels' heading change (counted).
+///
 /// Thread safety: push_*(), latest_command(), stats() and spare_image() from any thread; the
 /// interfaces' take_*(), command() and recycle() from the runtime's control thread.
 #include <duet/runtime/robot/robot_io.hpp>
@@ -24,6 +30,8 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <utility>
 #include <span>
 #include <vector>
 
@@ -32,6 +40,7 @@ namespace duet {
 struct PushRobotSettings {
   std::size_t frame_queue = 8;       ///< frames kept per sensor until the runtime takes them, [1, 1024]
   std::size_t odometry_queue = 1024; ///< odometry messages kept until the runtime takes them, [1, 1e6]
+  std::size_t gyro_queue = 4096;     ///< gyro samples kept until the runtime takes them, [1, 1e6]
 };
 void validate(const PushRobotSettings& s);
 
@@ -41,6 +50,10 @@ struct PushStats {
   std::uint64_t frames_overflowed = 0;    ///< oldest frames dropped because the runtime did not take them in time
   std::uint64_t odometry_pushed = 0;
   std::uint64_t odometry_overflowed = 0;  ///< oldest odometry dropped likewise
+  std::uint64_t gyro_pushed = 0;
+  std::uint64_t gyro_overflowed = 0;      ///< oldest gyro samples dropped likewise
+  std::uint64_t gyro_invalid = 0;         ///< non-finite stamp or rate, or a stamp not after the previous: dropped
+  std::uint64_t gyro_gaps = 0;            ///< odometry steps the gyro did not cover: the wheels' heading kept
 };
 
 class PushRobot;
@@ -83,6 +96,9 @@ class PushRobot final : public RobotSource {
   void push_frame(std::size_t sensor, double stamp_s, RgbdImage&& image);
   /// Queues an odometry message (stamp on the caller's clock). Any thread.
   void push_odometry(const OdometryMsg& msg);
+  /// Queues a gyro sample: the yaw rate [rad/s, counter-clockwise] measured up to stamp_s (the
+  /// caller's clock). From the first sample on, the odometry's heading comes from the gyro. Any thread.
+  void push_gyro(double stamp_s, float yaw_rate_rps);
   /// A buffer a consumed frame left behind, for the next push to fill (empty if none). Any thread.
   [[nodiscard]] RgbdImage spare_image();
   /// The latest command the runtime gave (zero before the first). Any thread.
@@ -108,9 +124,18 @@ class PushRobot final : public RobotSource {
   std::vector<RgbdSensorInterface*> ifaces_;
   std::atomic<double> origin_{0.0};
 
+  // The control thread's gyro fusion (take_odometry).
+  void fuse(std::vector<OdometryMsg>& msgs, std::deque<std::pair<double, float>>&& gyro);
+  bool gyro_on_ = false;                              ///< a gyro sample was seen
+  std::deque<std::pair<double, float>> gyro_hist_;    ///< samples (runtime time, rate), oldest first
+  std::optional<OdometryMsg> last_wheel_;             ///< the previous wheel message (raw)
+  Pose2 fused_;                                       ///< the fused pose of that message
+  double last_gyro_t_ = -1e300;
+
   mutable std::mutex mutex_;  ///< guards everything below
   std::vector<std::deque<StampedRgbd>> frames_;
   std::deque<OdometryMsg> odometry_;
+  std::deque<std::pair<double, float>> gyro_;  ///< (stamp, rate) pushed, not yet taken
   std::vector<RgbdImage> spare_;
   Twist command_;
   PushStats stats_;
