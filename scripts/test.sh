@@ -28,7 +28,7 @@ if [ "${DUET_SKIP_SANITIZERS:-0}" != 1 ]; then
 
   echo "== duet: ThreadSanitizer build and the threaded tests"
   export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$here/tests/tsan.supp"
-  DUET_BUILD_TYPE=RelWithDebInfo DUET_BUILD_TARGETS="test_runtime test_capi" \
+  DUET_BUILD_TYPE=RelWithDebInfo DUET_BUILD_TARGETS="test_runtime test_capi_threads" \
     "$here/scripts/setup.sh" "$here/build-tsan" -DDUET_SANITIZE_THREAD=ON -DDUET_BUILD_BENCH=OFF
   (cd "$here/build-tsan" && ctest --output-on-failure -j "$jobs" --timeout 1800 \
      -R '^(BackgroundWorker|BackgroundRuntime|Clock|CapiRuntimeThreads|PushRobot)\.')

@@ -1,0 +1,94 @@
+// duet_runtime with its own control thread while drivers push from three threads and the
+// application reads: its own test executable so that the ThreadSanitizer pass (scripts/test.sh)
+// builds only libduet.so and this file.
+#include "capi/capi_helpers.hpp"
+
+#include <atomic>
+#include <chrono>
+#include <thread>
+#include <vector>
+
+namespace {
+
+using duet_capi_test::DeviceTest;
+
+// Drivers push from their own threads while the runtime runs its own control thread and the
+// application reads the status, the command and the grid: part of the ThreadSanitizer pass.
+// One-thread arenas (device and background): Debian's TBB is not instrumented, so TSan would
+// take its parallel loops for races (scripts/test.sh).
+class CapiRuntimeThreads : public DeviceTest {
+ protected:
+  void SetUp() override {
+    (void)duet_device_get_error(nullptr);
+    device_ = duet_device_new("threads=1");
+    ASSERT_NE(device_, nullptr) << duet_device_get_error_message(nullptr);
+  }
+};
+
+TEST_F(CapiRuntimeThreads, PushFromThreeThreadsWhileTheRuntimeRunsItsOwnThread) {
+  const char* sets[] = {"runtime.background_threads=1", "runtime.sensor_rate_hz=5"};
+  duet_runtime rt = duet_runtime_new(device_, DUET_PROFILE_NAME_OR_FILE, "dual", sets, 2, 1);
+  ASSERT_NE(rt, nullptr) << message();
+  std::atomic<int> events{0};
+  duet_runtime_set_event_callback(rt, [](void* u, double, const char*) { ++*static_cast<std::atomic<int>*>(u); }, &events);
+  duet_runtime_start(rt, nullptr, nullptr);
+  ASSERT_EQ(take(), DUET_ERROR_NONE) << message();
+  duet_runtime_start(rt, nullptr, nullptr);
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_OPERATION);
+  duet_runtime_spin_once(rt, duet_time_now());
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_OPERATION);
+  std::atomic<bool> stop{false};
+  auto camera = [&](size_t sensor) {
+    std::vector<uint16_t> depth(640 * 480, static_cast<uint16_t>(1500 + 500 * sensor));
+    while (!stop.load()) {
+      duet_rgbd_image im;
+      duet_rgbd_image_init(&im);
+      im.stamp_s = duet_time_now();
+      im.depth = depth.data();
+      im.width = 640;
+      im.height = 480;
+      duet_runtime_push_rgbd(rt, sensor, &im);
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    }
+  };
+  auto wheels = [&] {
+    while (!stop.load()) {
+      duet_runtime_push_odometry(rt, duet_time_now(), duet_pose2{0, 0, 0}, duet_twist{0, 0});
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  };
+  std::thread c0(camera, 0), c1(camera, 1), w(wheels);
+  std::size_t reads = 0;
+  const double t_end = duet_time_now() + 3.0;
+  while (duet_time_now() < t_end) {
+    duet_runtime_status s;
+    duet_runtime_get_status(rt, &s);
+    (void)duet_runtime_get_command(rt);
+    duet_grid g = duet_runtime_get_grid(rt);
+    duet_grid_release(g);
+    ++reads;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  duet_runtime_pause(rt);
+  duet_runtime_resume(rt);
+  stop.store(true);
+  c0.join();
+  c1.join();
+  w.join();
+  duet_runtime_join(rt);
+  ASSERT_EQ(take(), DUET_ERROR_NONE) << message();
+  duet_runtime_stats st;
+  duet_runtime_get_stats(rt, &st);
+  EXPECT_GT(st.control_periods, 20u);  // 20 Hz over 3 s, with margin for a slow sanitizer build
+  EXPECT_GE(st.frames_pushed, 20u);
+  EXPECT_GE(st.odometry_pushed, 100u);
+  EXPECT_GE(st.sets_integrated, 1u);
+  EXPECT_GT(reads, 10u);
+  duet_cloud cloud = duet_runtime_get_cloud(rt);
+  EXPECT_GT(duet_cloud_get_size(cloud), 0u);
+  duet_cloud_release(cloud);
+  duet_runtime_release(rt);
+  EXPECT_EQ(take(), DUET_ERROR_NONE) << message();
+}
+
+}  // namespace
