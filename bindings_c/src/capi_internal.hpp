@@ -55,6 +55,9 @@ struct Object {
   Object(const Object&) = delete;
   Object& operator=(const Object&) = delete;
   virtual ~Object() = default;
+  /// Called once when the last handle reference is released (outside the registry's lock),
+  /// before the registry's shared_ptr is dropped; the object may live on in calls in flight.
+  virtual void released() noexcept {}
 
   const Kind kind;
   std::uint64_t key = 0;      ///< registry key = handle value

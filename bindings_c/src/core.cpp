@@ -340,6 +340,8 @@ void release_handle(const void* handle, Kind expected, const char* fn) noexcept 
       }
     }
   }
+  for (const auto& o : graveyard)
+    if (o) o->released();  // the last handle reference is gone (a runtime stops its thread)
   obj.reset();
   graveyard.clear();
   if (lost) report(nullptr, DUET_ERROR_INVALID_OPERATION, fn, "handle was released concurrently");

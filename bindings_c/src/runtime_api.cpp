@@ -253,14 +253,20 @@ DUET_API double duet_time_now(void) {
 }
 
 DUET_API void duet_runtime_start(duet_runtime runtime, duet_clock_fn clock, void* user_ptr) {
-  with_runtime(runtime, "duet_runtime_start", [&](Runtime& r) {
+  auto self = resolve<Runtime>(runtime, "duet_runtime_start", "runtime");
+  if (!self) return;
+  guarded(self->device.get(), "duet_runtime_start", [&] {
+    Runtime& r = *self;
     std::lock_guard lock(r.run);
     if (r.mode == Runtime::Mode::kSpin) api_fail(DUET_ERROR_INVALID_OPERATION, "duet_runtime_spin_once was used: the runtime is spun by its caller");
     if (r.mode == Runtime::Mode::kThread) api_fail(DUET_ERROR_INVALID_OPERATION, "the runtime's thread is already started");
+    if (r.quit.load()) api_fail(DUET_ERROR_INVALID_OPERATION, "the runtime was joined: its thread cannot start again");
     r.mode = Runtime::Mode::kThread;
     r.clock = clock;
     r.clock_user = user_ptr;
-    r.thread = std::thread([p = &r] { p->thread_main(); });
+    // The thread holds the object alive: a release (even from its own event callback) ends the
+    // loop (released()), and the last of the two to let go frees it.
+    r.thread = std::thread([keep = self] { keep->thread_main(); });
   });
 }
 

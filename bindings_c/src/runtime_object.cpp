@@ -236,9 +236,22 @@ void Runtime::thread_main() {
   }
 }
 
-void Runtime::join() {
+void Runtime::end_thread() noexcept {
   quit.store(true);
-  if (thread.joinable() && thread.get_id() != std::this_thread::get_id()) thread.join();
+  std::lock_guard lock(thread_mutex);
+  if (!thread.joinable()) return;
+  if (thread.get_id() != std::this_thread::get_id()) thread.join();
+  else thread.detach();  // on the thread itself (its event callback released the runtime): it ends by itself
+}
+
+void Runtime::released() noexcept {
+  // Called with the registry's reference still held: joining here (on another thread) means the
+  // thread's own reference is dropped first, so the object is freed by the releasing thread.
+  end_thread();
+}
+
+void Runtime::join() {
+  end_thread();
   std::lock_guard lock(run);
   try {
     drain_locked();

@@ -45,6 +45,9 @@ struct Published {
 struct Runtime final : Object {
   Runtime(std::shared_ptr<Device> d, Profile p);
   ~Runtime() override;
+  /// The last handle reference is gone: the runtime's thread (which holds the object alive)
+  /// ends after its current period; the object is freed by whichever side lets go last.
+  void released() noexcept override;
 
   std::shared_ptr<Device> device;
   const Profile profile;
@@ -96,10 +99,15 @@ struct Runtime final : Object {
 
   // ---- the runtime's own thread
   std::thread thread;
+  std::mutex thread_mutex;  ///< guards joining / detaching `thread`
   std::atomic<bool> quit{false};
+  /// Ends the thread: joins it, or detaches it when called on the thread itself.
+  void end_thread() noexcept;
   duet_clock_fn clock = nullptr;
   void* clock_user = nullptr;
   void thread_main();
+  /// Stops the thread (if any) and waits for it - unless called on the runtime's own thread
+  /// (a callback releasing the last reference): then the thread is detached and ends by itself.
   void join();
 
  private:

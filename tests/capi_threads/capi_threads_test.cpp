@@ -4,6 +4,7 @@
 #include "capi/capi_helpers.hpp"
 
 #include <atomic>
+#include <string>
 #include <chrono>
 #include <thread>
 #include <vector>
@@ -88,6 +89,50 @@ TEST_F(CapiRuntimeThreads, PushFromThreeThreadsWhileTheRuntimeRunsItsOwnThread) 
   EXPECT_GT(duet_cloud_get_size(cloud), 0u);
   duet_cloud_release(cloud);
   duet_runtime_release(rt);
+  EXPECT_EQ(take(), DUET_ERROR_NONE) << message();
+}
+
+TEST_F(CapiRuntimeThreads, ReleasedFromItsOwnEventCallback) {
+  // The last reference dropped on the runtime's own thread (its event callback): the thread
+  // ends by itself and frees the runtime - no join of a thread by itself, no use after free.
+  const char* sets[] = {"runtime.background_threads=1"};
+  duet_runtime rt = duet_runtime_new(device_, DUET_PROFILE_NAME_OR_FILE, "single", sets, 1, 1);
+  ASSERT_NE(rt, nullptr) << message();
+  struct Ctx {
+    duet_runtime rt;
+    std::atomic<bool> released{false};
+  } ctx{rt};
+  duet_runtime_set_event_callback(
+      rt,
+      [](void* u, double, const char* m) {
+        auto* c = static_cast<Ctx*>(u);
+        if (std::string(m).find("-> done") != std::string::npos && !c->released.exchange(true)) duet_runtime_release(c->rt);
+      },
+      &ctx);
+  duet_runtime_start(rt, nullptr, nullptr);
+  duet_runtime_stop(rt);  // the next period reports "idle -> done"
+  for (int i = 0; i < 400 && !ctx.released.load(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  EXPECT_TRUE(ctx.released.load());
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the thread finishes and frees the runtime
+  EXPECT_EQ(take(), DUET_ERROR_NONE) << message();
+  duet_runtime_spin_once(rt, 1.0);  // released: an error, never a crash
+  EXPECT_EQ(take(), DUET_ERROR_INVALID_OPERATION);
+}
+
+TEST_F(CapiRuntimeThreads, ReleaseWhileRunningStopsTheThreadFirst) {
+  const char* sets[] = {"runtime.background_threads=1"};
+  duet_runtime rt = duet_runtime_new(device_, DUET_PROFILE_NAME_OR_FILE, "single", sets, 1, 1);
+  ASSERT_NE(rt, nullptr) << message();
+  static std::atomic<int> after{0};
+  static std::atomic<bool> gone{false};
+  duet_runtime_set_event_callback(rt, [](void*, double, const char*) { if (gone.load()) ++after; }, nullptr);
+  duet_runtime_start(rt, nullptr, nullptr);
+  std::this_thread::sleep_for(std::chrono::milliseconds(150));
+  duet_runtime_stop(rt);
+  duet_runtime_release(rt);  // returns once the thread has ended
+  gone.store(true);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  EXPECT_EQ(after.load(), 0);  // no callback after the release returned
   EXPECT_EQ(take(), DUET_ERROR_NONE) << message();
 }
 
