@@ -67,7 +67,10 @@ enum duet_profile_kind {
 DUET_API duet_runtime duet_runtime_new(duet_device device, enum duet_profile_kind kind, const char* profile,
                                        const char* const* sets, size_t set_count, uint64_t seed);
 DUET_API void duet_runtime_retain(duet_runtime runtime);
-/* Dropping the last reference stops the runtime's thread (if started) and frees everything. */
+/* Dropping the last reference stops the runtime's thread (if started): it waits for the
+ * thread's current period, then frees everything (a recording is closed). From the runtime's
+ * own event callback it cannot wait for itself: the thread then ends and frees the runtime after
+ * the callback returns. */
 DUET_API void duet_runtime_release(duet_runtime runtime);
 
 /* ---- profiles ----------------------------------------------------------------------------- */
