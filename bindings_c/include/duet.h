@@ -13,6 +13,9 @@
  *   duet_planner the exploration and control kernels' state: a copy of a grid, its observation
  *                model and inflation, sensors, goal blacklist, dynamic window state (see
  *                "Exploration planner"). Holds a reference to its device like clouds and grids.
+ *   duet_runtime the whole robot loop: frames and odometry in, commands, pose and maps out
+ *                (duet_runtime.h).
+ *   duet_sim     the simulator: a world and a robot stepped with commands (duet_sim.h).
  *   Every handle starts with one reference; *_retain adds one, *_release drops one, the object
  *   is destroyed when the last reference is dropped. Clouds and grids hold a reference to the
  *   device that created them, so a device stays valid until its last cloud/grid is released
