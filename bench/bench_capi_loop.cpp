@@ -185,24 +185,24 @@ class Tap final : public RobotSource {
 
  private:
   struct Chassis final : ChassisInterface {
-    explicit Chassis(Tap& t) : t(t) {}
-    void command(const Twist& c) override { t.inner_.chassis().command(c); }
+    explicit Chassis(Tap& tap) : t_(tap) {}
+    void command(const Twist& c) override { t_.inner_.chassis().command(c); }
     std::vector<OdometryMsg> take_odometry() override {
-      auto v = t.inner_.chassis().take_odometry();
-      t.out_.periods.back().odometry = v;
+      auto v = t_.inner_.chassis().take_odometry();
+      t_.out_.periods.back().odometry = v;
       return v;
     }
-    Tap& t;
+    Tap& t_;
   };
   struct Sensor final : RgbdSensorInterface {
-    Sensor(Tap& t, std::size_t i) : t(t), i(i) {}
+    Sensor(Tap& tap, std::size_t index) : t_(tap), i_(index) {}
     std::vector<StampedRgbd> take_frames() override {
-      auto v = t.inner_.sensors()[i]->take_frames();
-      t.out_.periods.back().frames[i] = v;
+      auto v = t_.inner_.sensors()[i_]->take_frames();
+      t_.out_.periods.back().frames[i_] = v;
       return v;
     }
-    Tap& t;
-    std::size_t i;
+    Tap& t_;
+    std::size_t i_;
   };
   RobotSource& inner_;
   Captured& out_;

@@ -128,7 +128,7 @@ DUET_API void duet_sim_get_sensor_info(duet_sim sim, size_t sensor, duet_runtime
 DUET_API size_t duet_sim_get_frames_waiting(duet_sim sim, size_t sensor) {
   size_t n = 0;
   with_sim(sim, "duet_sim_get_frames_waiting", [&](Sim& s) {
-    if (sensor >= s.frames.size()) invalid_argument("sensor " + std::to_string(sensor) + " out of range (" + std::to_string(s.frames.size()) + " sensors)");
+    (void)sensor_of(s.profile, sensor);  // checks the index
     n = s.frames[sensor].size();
   });
   return n;
@@ -138,8 +138,7 @@ DUET_API int duet_sim_take_frame(duet_sim sim, size_t sensor, double* stamp_s, u
                                  uint8_t* rgb, size_t rgb_row_stride, int width, int height) {
   int taken = 0;
   with_sim(sim, "duet_sim_take_frame", [&](Sim& s) {
-    if (sensor >= s.frames.size()) invalid_argument("sensor " + std::to_string(sensor) + " out of range (" + std::to_string(s.frames.size()) + " sensors)");
-    const auto& in = s.profile.sensors[sensor].intrinsics;
+    const auto& in = sensor_of(s.profile, sensor).intrinsics;
     if (width != in.width || height != in.height)
       invalid_argument("width x height is " + std::to_string(width) + " x " + std::to_string(height) + ", the sensor's is " +
                        std::to_string(in.width) + " x " + std::to_string(in.height));

@@ -6,6 +6,8 @@
 #include <duet/runtime/robot/faults.hpp>
 #include <duet/runtime/robot/robot_source.hpp>
 
+#include "io/run_json.hpp"
+
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -28,14 +30,12 @@ void add_replay_command(CLI::App& app, int& exit_code);
 int run_map_folder(const std::string& input, const std::string& out, const std::string& profile, const std::string& layout, int threads,
                    bool quiet);
 
-/// summary.json's timing of a run: the nominal control period and the latencies (p50/p99/max/mean, ms), late and missed periods.
-[[nodiscard]] nlohmann::json timing_json(const RuntimeTiming& timing);
+/// summary.json's timing and input blocks: the runtime's (io/run_json.hpp), shared with duet_runtime_save.
+using detail::input_json;
+using detail::timing_json;
 
 /// summary.json's "faults": each injected fault (faults.hpp) and how often it acted.
 [[nodiscard]] nlohmann::json faults_json(const std::vector<FaultCount>& faults);
-/// summary.json's "input": what the runtime's input guard did (input_guard.hpp) and its reactions.
-[[nodiscard]] nlohmann::json input_json(const InputStats& input, std::uint64_t sets_with_missing, std::uint64_t blind_holds,
-                                        std::size_t relocalizations);
 
 /// The robot sources `duet run` knows (robot_sources.cpp: one line each).
 [[nodiscard]] const RobotSourceRegistry& robot_sources();

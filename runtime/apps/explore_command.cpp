@@ -28,41 +28,12 @@
 
 namespace duet::app {
 
-nlohmann::json timing_json(const RuntimeTiming& tm) {
-  auto latency = [](const LatencySummary& l) {
-    return nlohmann::json{{"count", l.count}, {"p50_ms", 1e3 * l.p50_s}, {"p99_ms", 1e3 * l.p99_s}, {"max_ms", 1e3 * l.max_s},
-                          {"mean_ms", 1e3 * l.mean_s}};
-  };
-  return {{"nominal_period_ms", 1e3 * tm.nominal_period_s},
-          {"control_period", latency(tm.control_period)},
-          {"command_latency", latency(tm.command_latency)},
-          {"frame_to_map", latency(tm.frame_to_map)},
-          {"decision", latency(tm.decision)},
-          {"late_periods", tm.late_periods},
-          {"missed_periods", tm.missed_periods}};
-}
-
 nlohmann::json faults_json(const std::vector<FaultCount>& faults) {
   nlohmann::json j = nlohmann::json::array();
   for (const auto& f : faults) j.push_back({{"spec", f.fault.spec}, {"kind", to_string(f.fault.kind)}, {"injected", f.injected}});
   return j;
 }
 
-nlohmann::json input_json(const InputStats& in, std::uint64_t sets_with_missing, std::uint64_t blind_holds, std::size_t relocalizations) {
-  return {{"odometry_invalid", in.odometry_invalid},
-          {"odometry_out_of_order", in.odometry_out_of_order},
-          {"odometry_jumps_absorbed", in.odometry_jumps},
-          {"frames_invalid", in.frames_invalid},
-          {"frames_out_of_order", in.frames_out_of_order},
-          {"frames_empty", in.frames_empty},
-          {"frames_garbled", in.frames_garbled},
-          {"clock_restarts", in.clock_restarts},
-          {"sensor_silences", in.sensor_silences},
-          {"missing_frames_added", in.missing_frames},
-          {"sets_with_missing_frames", sets_with_missing},
-          {"blind_hold_periods", blind_holds},
-          {"relocalizations", relocalizations}};
-}
 
 namespace {
 

@@ -66,8 +66,11 @@ Recorder::Recorder(const fs::path& dir, const Profile& profile, const RecorderSe
     fs::create_directories(s / "rgb", ec);
     fs::create_directories(s / "depth", ec);
     if (ec) fail(ErrorCode::kIo, (s / "depth").string() + ": cannot create the folder: " + ec.message());
-    write_text_file(s / "rgb.txt", "# stamp file arrival (duet recording: the runtime's time line [s])\n");
-    write_text_file(s / "depth.txt", "# stamp file arrival (duet recording: the runtime's time line [s])\n");
+    for (const char* list : {"depth.txt", "rgb.txt"}) {
+      std::ofstream& f = (list[0] == 'd' ? depth_lists_ : rgb_lists_).emplace_back(s / list);
+      if (!f) fail(ErrorCode::kIo, (s / list).string() + ": cannot be created");
+      f << "# stamp file arrival (duet recording: the runtime's time line [s])\n";
+    }
   }
   write_text_file(dir / "profile.yaml", to_yaml(profile));
   odometry_.open(dir / "odometry.txt");
@@ -142,7 +145,8 @@ void Recorder::writer() {
         if (!cv::imwrite((folder / "rgb" / name).string(), bgr, png)) err = (folder / "rgb" / name).string() + ": cannot be written";
       }
       if (err.empty()) {
-        std::ofstream d(folder / "depth.txt", std::ios::app), c(folder / "rgb.txt", std::ios::app);
+        std::ofstream& d = depth_lists_[j.sensor];
+        std::ofstream& c = rgb_lists_[j.sensor];
         d << exact(j.stamp) << " depth/" << name << ' ' << exact(j.arrival) << '\n';
         if (has_rgb) c << exact(j.stamp) << " rgb/" << name << ' ' << exact(j.arrival) << '\n';
         if (!d || !c) err = folder.string() + ": cannot append to depth.txt / rgb.txt";
@@ -170,6 +174,12 @@ void Recorder::close() {
   odometry_.flush();
   if (!odometry_ && stats_.error.empty()) stats_.error = (dir_ / "odometry.txt").string() + ": write failed";
   odometry_.close();
+  for (auto* lists : {&depth_lists_, &rgb_lists_})
+    for (std::ofstream& f : *lists) {
+      f.flush();
+      if (!f && stats_.error.empty()) stats_.error = dir_.string() + ": a frame list could not be written";
+      f.close();
+    }
   YAML::Emitter y;
   y << YAML::BeginMap << YAML::Key << "format" << YAML::Value << kFormat << YAML::Key << "version" << YAML::Value << kVersion;
   y << YAML::Key << "profile" << YAML::Value << "profile.yaml" << YAML::Key << "odometry" << YAML::Value << "odometry.txt";
@@ -251,20 +261,29 @@ std::vector<std::string> fields(const std::string& line) {
   return out;
 }
 
-double number(const std::string& text, const fs::path& file, std::size_t line, const char* what) {
-  double v = 0.0;
+/// A finite number of type T (double for stamps, float for poses and twists); fails naming file:line.
+template <class T = double>
+T number(const std::string& text, const fs::path& file, std::size_t line, const char* what) {
+  T v{};
   const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
   if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !std::isfinite(v))
     fail(ErrorCode::kParse, file.string() + ":" + std::to_string(line) + ": " + what + " '" + text + "' is not a finite number");
   return v;
 }
 
-float number_f(const std::string& text, const fs::path& file, std::size_t line, const char* what) {
-  float v = 0.0f;
-  const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
-  if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !std::isfinite(v))
-    fail(ErrorCode::kParse, file.string() + ":" + std::to_string(line) + ": " + what + " '" + text + "' is not a finite number");
-  return v;
+/// One line of a frame list: "stamp file [arrival]" (without arrival: the stamp).
+struct ListLine {
+  double stamp = 0.0, arrival = 0.0;
+  std::string file;
+};
+ListLine list_line(const std::vector<std::string>& f, const fs::path& list, std::size_t line) {
+  if (f.size() != 2 && f.size() != 3)
+    fail(ErrorCode::kParse, list.string() + ":" + std::to_string(line) + ": expected 'stamp file [arrival]', got " + std::to_string(f.size()) + " fields");
+  ListLine l;
+  l.stamp = number(f[0], list, line, "stamp");
+  l.arrival = f.size() == 3 ? number(f[2], list, line, "arrival") : l.stamp;
+  l.file = f[1];
+  return l;
 }
 
 template <class F>
@@ -316,8 +335,8 @@ Recording read_recording(const fs::path& dir) {
       fail(ErrorCode::kParse, odom.string() + ":" + std::to_string(line) + ": expected 'stamp x y theta v omega [arrival]', got " + std::to_string(f.size()) + " fields");
     OdometryMsg m;
     m.stamp_s = number(f[0], odom, line, "stamp");
-    m.pose = Pose2{number_f(f[1], odom, line, "x"), number_f(f[2], odom, line, "y"), number_f(f[3], odom, line, "theta")};
-    m.twist = Twist{number_f(f[4], odom, line, "v"), number_f(f[5], odom, line, "omega")};
+    m.pose = Pose2{number<float>(f[1], odom, line, "x"), number<float>(f[2], odom, line, "y"), number<float>(f[3], odom, line, "theta")};
+    m.twist = Twist{number<float>(f[4], odom, line, "v"), number<float>(f[5], odom, line, "omega")};
     const double arrival = f.size() == 7 ? number(f[6], odom, line, "arrival") : m.stamp_s;
     if (arrival < last_arrival)
       fail(ErrorCode::kParse, odom.string() + ":" + std::to_string(line) + ": " + (f.size() == 7 ? "arrival" : "stamp") +
@@ -332,29 +351,25 @@ Recording read_recording(const fs::path& dir) {
     std::vector<RecordedFrameRef> frames;
     double last = -1e300;
     for_lines(depth_list, [&](const std::vector<std::string>& f, std::size_t line) {
-      if (f.size() != 2 && f.size() != 3)
-        fail(ErrorCode::kParse, depth_list.string() + ":" + std::to_string(line) + ": expected 'stamp file [arrival]', got " + std::to_string(f.size()) + " fields");
-      RecordedFrameRef r;
-      r.stamp_s = number(f[0], depth_list, line, "stamp");
-      r.arrival_s = f.size() == 3 ? number(f[2], depth_list, line, "arrival") : r.stamp_s;
-      if (r.arrival_s < last)
+      const ListLine l = list_line(f, depth_list, line);
+      if (l.arrival < last)
         fail(ErrorCode::kParse, depth_list.string() + ":" + std::to_string(line) + ": " + (f.size() == 3 ? "arrival" : "stamp") +
                                     " goes back in time (the lines must be in arrival order)");
-      last = r.arrival_s;
-      r.depth = folder / f[1];
+      last = l.arrival;
+      RecordedFrameRef r;
+      r.stamp_s = l.stamp;
+      r.arrival_s = l.arrival;
+      r.depth = folder / l.file;
       frames.push_back(std::move(r));
     });
     // Colour by (stamp, arrival): a frame without colour has no rgb line.
     std::size_t k = 0;
     for_lines(rgb_list, [&](const std::vector<std::string>& f, std::size_t line) {
-      if (f.size() != 2 && f.size() != 3)
-        fail(ErrorCode::kParse, rgb_list.string() + ":" + std::to_string(line) + ": expected 'stamp file [arrival]', got " + std::to_string(f.size()) + " fields");
-      const double stamp = number(f[0], rgb_list, line, "stamp");
-      const double arrival = f.size() == 3 ? number(f[2], rgb_list, line, "arrival") : stamp;
-      while (k < frames.size() && !(frames[k].stamp_s == stamp && frames[k].arrival_s == arrival)) ++k;
+      const ListLine l = list_line(f, rgb_list, line);
+      while (k < frames.size() && !(frames[k].stamp_s == l.stamp && frames[k].arrival_s == l.arrival)) ++k;
       if (k == frames.size())
         fail(ErrorCode::kParse, rgb_list.string() + ":" + std::to_string(line) + ": no depth frame with stamp " + f[0] + " in depth.txt (in order)");
-      frames[k++].rgb = folder / f[1];
+      frames[k++].rgb = folder / l.file;
     });
     rec.frames.push_back(std::move(frames));
   }

@@ -5,7 +5,7 @@
 #include <duet/runtime/io/output.hpp>
 #include <duet/runtime/io/runtime_outputs.hpp>
 
-#include <nlohmann/json.hpp>
+#include "io/run_json.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -50,20 +50,8 @@ void write_runtime_outputs(ExplorationRuntime& rt, const Trajectory& trajectory,
   j["frames_received"] = st.frames_received;
   j["frame_drops"] = st.frame_drops;
   j["odometry_received"] = st.odometry_received;
-  j["input"] = {{"odometry_invalid", st.input.odometry_invalid},     {"odometry_out_of_order", st.input.odometry_out_of_order},
-                {"odometry_jumps_absorbed", st.input.odometry_jumps}, {"frames_invalid", st.input.frames_invalid},
-                {"frames_out_of_order", st.input.frames_out_of_order}, {"frames_empty", st.input.frames_empty},
-                {"frames_garbled", st.input.frames_garbled},         {"clock_restarts", st.input.clock_restarts},
-                {"sensor_silences", st.input.sensor_silences},       {"missing_frames", st.input.missing_frames},
-                {"blind_holds", st.blind_holds}};
-  const RuntimeTiming tm = rt.timing();
-  auto lat = [](const LatencySummary& l) {
-    return nlohmann::json{{"count", l.count}, {"p50_ms", 1e3 * l.p50_s}, {"p99_ms", 1e3 * l.p99_s}, {"max_ms", 1e3 * l.max_s}, {"mean_ms", 1e3 * l.mean_s}};
-  };
-  j["runtime"] = {{"nominal_period_ms", 1e3 * tm.nominal_period_s}, {"control_period", lat(tm.control_period)},
-                  {"command_latency", lat(tm.command_latency)},    {"frame_to_map", lat(tm.frame_to_map)},
-                  {"decision", lat(tm.decision)},                  {"late_periods", tm.late_periods},
-                  {"missed_periods", tm.missed_periods}};
+  j["input"] = detail::input_json(st.input, st.sets_with_missing, st.blind_holds, st.relocalizations);
+  j["runtime"] = detail::timing_json(rt.timing());
   for (const auto& [k, v] : extra) j[k] = v;
   write_text_file(dir / "summary.json", j.dump(2) + "\n");
 }

@@ -83,6 +83,7 @@ class Recorder {
   RecorderSettings settings_;
   std::vector<std::uint64_t> next_index_;  ///< per sensor
   std::ofstream odometry_;
+  std::vector<std::ofstream> depth_lists_, rgb_lists_;  ///< per sensor; the writer thread's
   mutable std::mutex mutex_;
   std::condition_variable cv_, space_cv_;
   std::deque<Job> jobs_;
