@@ -87,6 +87,7 @@ void register_render();  // issue 4: simulated RGB-D rendering (bench_render.cpp
 void register_scan_match();
 void register_pose_graph();     // issue 4: loop closure's pose graph and grid rebuild (bench_pose_graph.cpp)
 void register_decision_loop();  // issue 18: the decision as the runtime takes it, on states of real runs (bench_decision_loop.cpp)
+void register_odometry();       // issue 21: visual odometry against OpenCV and Open3D on real frames (bench_odometry.cpp)
 
 /// Runs `body` in the arena of `threads` threads and reports a duet::Error (or any
 /// std::exception) as a skipped benchmark instead of aborting the whole run.

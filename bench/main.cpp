@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   duet::bench::register_scan_match();
   duet::bench::register_pose_graph();
   duet::bench::register_decision_loop();
+  duet::bench::register_odometry();
 #ifdef DUET_HAVE_PCL
   benchmark::AddCustomContext("duet_pcl", "PCL peers enabled");
 #else

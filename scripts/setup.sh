@@ -11,7 +11,8 @@ shift || true
 pkgs=(build-essential cmake pkg-config
       libeigen3-dev libembree-dev libtbb-dev libopencv-dev libpcl-dev
       libbenchmark-dev libgtest-dev libgmock-dev libyaml-cpp-dev libspdlog-dev libcli11-dev
-      liblzf-dev nlohmann-json3-dev libpng-dev python3 python3-numpy python3-pytest)
+      liblzf-dev nlohmann-json3-dev libpng-dev python3 python3-numpy python3-pytest
+      libopen3d-dev)  # Open3D: the odometry benchmark's peer only
 # DUET_EXTRA_PKGS: more packages a caller needs (scripts/fuzz.sh: clang and libFuzzer).
 read -r -a extra_pkgs <<< "${DUET_EXTRA_PKGS:-}"
 pkgs+=("${extra_pkgs[@]}")

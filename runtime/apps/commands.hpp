@@ -26,6 +26,7 @@ void add_explore_command(CLI::App& app, int& exit_code);
 void add_compare_command(CLI::App& app, int& exit_code);
 void add_run_command(CLI::App& app, int& exit_code);
 void add_replay_command(CLI::App& app, int& exit_code);
+void add_eval_traj_command(CLI::App& app, int& exit_code);
 /// `duet map` on a folder (map_command.cpp), for `duet replay` of a TUM RGB-D folder.
 int run_map_folder(const std::string& input, const std::string& out, const std::string& profile, const std::string& layout, int threads,
                    bool quiet);

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   duet::app::add_compare_command(app, exit_code);
   duet::app::add_run_command(app, exit_code);
   duet::app::add_replay_command(app, exit_code);
+  duet::app::add_eval_traj_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -223,6 +223,20 @@ inline Eigen::Isometry3f paper_sensor2() {
   return eq6_T_robot_camera(-0.118f, 0.0f, 0.481f, -std::numbers::pi_v<float> / 2.0f);
 }
 
+// ---- errors ------------------------------------------------------------------------------------
+
+/// `fn` must throw duet::Error with `code` and a message containing `what`.
+inline void expect_error(const std::function<void()>& fn, const std::string& what,
+                         ErrorCode code = ErrorCode::kInvalidArgument) {
+  try {
+    fn();
+    ADD_FAILURE() << "no error for " << what;
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), code) << e.what();
+    EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+  }
+}
+
 // ---- threads -----------------------------------------------------------------------------------
 
 /// Runs fn inside a task arena of `threads` threads and returns its result.

@@ -62,7 +62,12 @@ TEST(Output, AWriterKilledMidWriteLeavesThePreviousFileOrTheNewOneWhole) {
   const std::size_t kSize = std::size_t{48} << 20;  // 48 MiB per write: long enough to be killed inside one
   int mid_write_kills = 0;
   std::string payload(kSize, 'a');  // allocated before fork(): the child only fills and writes it
-  for (const int delay_ms : {5, 20, 45, 90, 150}) {  // fixed delays (no randomness)
+  // Fixed delays (no randomness). The first five land inside a write on a typical machine; on a
+  // slow one (a VM where the child's copy-on-write page faults of the 48 MiB take > 150 ms) the
+  // longer ones do. The loop stops once a kill landed inside a write after the first five.
+  int tried = 0;
+  for (const int delay_ms : {5, 20, 45, 90, 150, 300, 600, 1200, 2400}) {
+    if (++tried > 5 && mid_write_kills > 0) break;
     const pid_t pid = ::fork();
     ASSERT_GE(pid, 0);
     if (pid == 0) {  // the writer: rewrites the file over and over, each time with one letter
