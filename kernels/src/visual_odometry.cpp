@@ -197,6 +197,9 @@ void refine(std::span<const Corr> corr, std::span<const std::uint32_t> inl, std:
   sse_out = sse;
 }
 
+VisualOdometryResult estimate_motion_once(const VisualFrame& prev, const VisualFrame& curr, const Eigen::Isometry3d& guess,
+                                          const VisualOdometrySettings& s);
+
 }  // namespace
 
 const char* to_string(VisualOdometryStatus s) noexcept {
@@ -278,6 +281,21 @@ void make_visual_frame(std::span<const SensorFrame> frames, const VisualFrameSet
 VisualOdometryResult estimate_motion(const VisualFrame& prev, const VisualFrame& curr, const Eigen::Isometry3d& guess,
                                      const VisualOdometrySettings& s) {
   validate(s);
+  VisualOdometryResult r = estimate_motion_once(prev, curr, guess, s);
+  if (r.status == VisualOdometryStatus::kOk || !(s.guided_radius_px > 0.0f) || r.status == VisualOdometryStatus::kTooFewFeatures)
+    return r;
+  // The guess was too far off for its window (or the window too small): brute force.
+  VisualOdometrySettings brute = s;
+  brute.guided_radius_px = 0.0f;
+  VisualOdometryResult b = estimate_motion_once(prev, curr, guess, brute);
+  b.matches += r.matches;
+  return b;
+}
+
+namespace {
+
+VisualOdometryResult estimate_motion_once(const VisualFrame& prev, const VisualFrame& curr, const Eigen::Isometry3d& guess,
+                                          const VisualOdometrySettings& s) {
   if (prev.cameras.size() != curr.cameras.size())
     fail(ErrorCode::kInvalidArgument, "estimate_motion: the previous frame has " + std::to_string(prev.cameras.size()) +
                                           " cameras, the current one " + std::to_string(curr.cameras.size()));
@@ -454,6 +472,8 @@ VisualOdometryResult estimate_motion(const VisualFrame& prev, const VisualFrame&
   res.status = VisualOdometryStatus::kOk;
   return res;
 }
+
+}  // namespace
 
 Eigen::Matrix3d planar_covariance(const Eigen::Isometry3d& motion, const Eigen::Matrix<double, 6, 6>& covariance) {
   // motion * exp(xi): translation += R v, rotation vector (previous frame) += R omega.

@@ -160,6 +160,8 @@ sim::ExploreSettings make_settings(const Profile& profile, std::uint64_t seed, d
     double r = 0.0;
     for (const auto& s : profile.sensors) r = std::max(r, static_cast<double>(s.rate_hz));
     es.sensor_rate_hz = r;
+  } else if (sensor_rate == 0.0 && profile.runtime.visual_odometry.enabled) {
+    es.sensor_rate_hz = profile.runtime.visual_odometry.rate_hz;  // the pipeline's rate: vision's
   } else {
     es.sensor_rate_hz = sensor_rate;
   }
@@ -354,7 +356,7 @@ void add_explore_command(CLI::App& app, int& exit_code) {
   cmd->add_option("-t,--max-time", o->max_time, "simulated time limit [s]")->capture_default_str();
   cmd->add_option("-o,--out", o->out, "output folder")->capture_default_str();
   cmd->add_option("--sensor-rate", o->sensor_rate,
-                  "render rate: pipeline (what the mapper consumes, 1 Hz), full (the profile's 30 Hz) or a rate in Hz")
+                  "render rate: pipeline (what the pipeline consumes: the map rate, 1 Hz - or vision's localization.visual_odometry.rate_hz, 5 Hz, when it is on), full (the profile's 30 Hz) or a rate in Hz")
       ->capture_default_str();
   cmd->add_flag("--realtime", o->realtime, "pace the simulation by the wall clock (the runtime then runs in the background mode)");
   cmd->add_option("--execution", o->execution,

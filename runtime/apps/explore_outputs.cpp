@@ -68,13 +68,27 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
   j["frame_drops"] = s.frame_drops;
   j["odometry_unmatched"] = s.odometry_unmatched;
   j["odometry_error_end_m"] = s.odometry_error_m;
-  j["pose"] = {{"source", s.scan_matches + s.scan_match_rejected > 0 ? "odometry + scan matching" : "odometry"},
+  const std::string odom_source = s.visual_odometry ? "wheels + vision (EKF)" : "odometry";
+  j["pose"] = {{"source", s.scan_matches + s.scan_match_rejected > 0 ? odom_source + " + scan matching" : odom_source},
                {"error_end_m", s.pose_error_m},
                {"error_max_m", s.pose_error_max_m},
                {"heading_error_end_deg", s.heading_error_deg},
                {"scan_matches", s.scan_matches},
                {"scan_match_rejected", s.scan_match_rejected},
                {"scan_match_time_s", s.scan_match_time_s}};
+  if (s.visual_odometry)
+    j["pose"]["visual_odometry"] = {{"health_end", s.localization_health},
+                                    {"sets", s.visual.sets},
+                                    {"accepted", s.visual.accepted},
+                                    {"gated", s.visual.gated},
+                                    {"failed", s.visual.failed},
+                                    {"failed_features", s.visual.too_few_features},
+                                    {"failed_matches", s.visual.too_few_matches},
+                                    {"failed_inliers", s.visual.too_few_inliers},
+                                    {"incomplete_sets", s.visual_sets_incomplete},
+                                    {"location_points", s.visual.location_points},
+                                    {"resets", s.visual.resets},
+                                    {"time_s", s.visual.time_s}};
   j["faults"] = faults_json(s.faults);
   j["input"] = input_json(s.input, s.sets_with_missing, s.blind_holds, s.relocalizations);
   j["occupied_cells_on_obstacles"] = s.occupied_on_obstacles >= 0.0 ? nlohmann::json(s.occupied_on_obstacles) : nlohmann::json(nullptr);

@@ -314,6 +314,10 @@ ExploreSummary SimExplore::summary() const {
   s.scan_matches = rs.scan_matches;
   s.scan_match_rejected = rs.scan_match_rejected;
   s.scan_match_time_s = rs.scan_match_time_s;
+  s.visual_odometry = settings_.runtime.visual_odometry.enabled;
+  s.visual = rs.visual;
+  s.visual_sets_incomplete = rs.visual_sets_incomplete;
+  if (const auto h = runtime_->localization_health()) s.localization_health = to_string(*h);
   s.execution = settings_.runtime.execution;
   s.realtime = settings_.realtime;
   s.timing = runtime_->timing();

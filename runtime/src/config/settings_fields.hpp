@@ -166,9 +166,63 @@ void runtime_fields(V& v, RuntimeSettings& s) {
 
 /// The `localization` section.
 template <class V>
+void fields(V& v, PoseEkfSettings& s) {
+  v("wheel_speed_sigma", s.wheel_speed_sigma);
+  v("wheel_yaw_rate_sigma", s.wheel_yaw_rate_sigma);
+  v("gyro_sigma", s.gyro_sigma);
+  v("wheel_scale_sigma", s.wheel_scale_sigma);
+  v("wheel_bias_sigma", s.wheel_bias_sigma);
+  v("wheel_scale_walk", s.wheel_scale_walk);
+  v("wheel_bias_walk", s.wheel_bias_walk);
+  v("visual_min_sigma_m", s.visual_min_sigma_m);
+  v("visual_min_sigma_deg", s.visual_min_sigma_deg);
+  v("gate_chi2", s.gate_chi2);
+}
+
+template <class V>
+void fields(V& v, VisualLocalizationSettings& s) {
+  v("enabled", s.enabled);
+  v("rate_hz", s.rate_hz);
+  v("good_min_inliers", s.good_min_inliers);
+  v("degraded_after_s", s.degraded_after_s);
+  v("lost_after_s", s.lost_after_s);
+  v("keyframe_translation_m", s.odometer.keyframe_translation_m);
+  v("keyframe_rotation_deg", s.odometer.keyframe_rotation_deg);
+  v("keyframe_inlier_ratio", s.odometer.keyframe_inlier_ratio);
+  v("reset_after_failures", s.odometer.reset_after_failures);
+  v("odometry_heading_from_gyro", s.odometry_heading_from_gyro);
+  v.section("features", [&](auto& w) {
+    w("max_features", s.odometer.frame.orb.max_features);
+    w("scale_factor", s.odometer.frame.orb.scale_factor);
+    w("levels", s.odometer.frame.orb.levels);
+    w("fast_threshold", s.odometer.frame.orb.fast_threshold);
+    w("min_fast_threshold", s.odometer.frame.orb.min_fast_threshold);
+    w("grid_cols", s.odometer.frame.orb.grid_cols);
+    w("grid_rows", s.odometer.frame.orb.grid_rows);
+    w("min_depth_m", s.odometer.frame.min_depth_m);
+    w("max_depth_m", s.odometer.frame.max_depth_m);
+  });
+  v.section("motion", [&](auto& w) {
+    w("max_hamming", s.odometer.odometry.match.max_distance);
+    w("ratio", s.odometer.odometry.match.ratio);
+    w("cross_check", s.odometer.odometry.match.cross_check);
+    w("guided_radius_px", s.odometer.odometry.guided_radius_px);
+    w("fundamental_filter", s.odometer.odometry.fundamental_filter);
+    w("fundamental_threshold_px", s.odometer.odometry.fundamental_threshold_px);
+    w("inlier_threshold_px", s.odometer.odometry.inlier_threshold_px);
+    w("max_hypotheses", s.odometer.odometry.max_hypotheses);
+    w("refine_iterations", s.odometer.odometry.refine_iterations);
+    w("rematch_radius_px", s.odometer.odometry.rematch_radius_px);
+    w("min_inliers", s.odometer.odometry.min_inliers);
+  });
+  v.section("ekf", [&](auto& w) { fields(w, s.ekf); });
+}
+
+template <class V>
 void localization_fields(V& v, RuntimeSettings& s) {
   v.section("pose_correction", [&](auto& w) { fields(w, s.pose_correction); });
   v.section("loop_closure", [&](auto& w) { fields(w, s.loop_closure); });
+  v.section("visual_odometry", [&](auto& w) { fields(w, s.visual_odometry); });
 }
 
 // ---- the robot's and the kernels' sections

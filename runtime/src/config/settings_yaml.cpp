@@ -201,6 +201,8 @@ RuntimeSettings read_runtime_settings(Reader& r, const YAML::Node& root, Runtime
             [&] { validate(s.pose_correction); });
   validated(r, {{"localization.loop_closure", localization ? localization["loop_closure"] : YAML::Node()}},
             [&] { validate(s.loop_closure); });
+  validated(r, {{"localization.visual_odometry", localization ? localization["visual_odometry"] : YAML::Node()}},
+            [&] { validate(s.visual_odometry); });
   validated(r, {{"runtime", runtime}}, [&] { validate(s); });
   return s;
 }

@@ -17,6 +17,8 @@ void validate(const VisualOdometerSettings& s) {
     fail(ErrorCode::kInvalidArgument, w + "keyframe_rotation_deg must be in (0, 180], got " + std::to_string(s.keyframe_rotation_deg));
   if (!(s.keyframe_inlier_ratio >= 0.0f && s.keyframe_inlier_ratio <= 1.0f))
     fail(ErrorCode::kInvalidArgument, w + "keyframe_inlier_ratio must be in [0, 1], got " + std::to_string(s.keyframe_inlier_ratio));
+  if (s.reset_after_failures < 1 || s.reset_after_failures > 1000)
+    fail(ErrorCode::kInvalidArgument, w + "reset_after_failures must be in [1, 1000], got " + std::to_string(s.reset_after_failures));
 }
 
 VisualOdometer::VisualOdometer(const VisualOdometerSettings& settings) : settings_((validate(settings), settings)) {}
@@ -26,6 +28,7 @@ void VisualOdometer::reset() {
   key_.cameras.clear();
   pose_ = key_pose_ = key_to_last_ = Eigen::Isometry3d::Identity();
   key_reference_inliers_ = 0;
+  failures_in_row_ = 0;
 }
 
 VisualOdometer::Step VisualOdometer::track(std::span<const SensorFrame> frames, const Eigen::Isometry3d& guess) {
@@ -48,10 +51,26 @@ VisualOdometer::Step VisualOdometer::track(std::span<const SensorFrame> frames, 
   step.result = estimate_motion(key_, current_, key_guess, settings_.odometry);
   if (step.result.status != VisualOdometryStatus::kOk) {
     ++failed_;
+    ++failures_in_row_;
     key_to_last_ = key_guess;
     pose_ = key_pose_ * key_to_last_;
+    const double moved = key_guess.translation().norm();
+    const double turned = Eigen::AngleAxisd(key_guess.linear()).angle() * 180.0 / 3.14159265358979323846;
+    const bool gone = failures_in_row_ >= settings_.reset_after_failures || moved >= settings_.keyframe_translation_m ||
+                      turned >= settings_.keyframe_rotation_deg;
+    if (gone && current_.features_with_depth() >= 2 * static_cast<std::size_t>(settings_.odometry.min_inliers)) {
+      std::swap(key_, current_);
+      key_pose_ = pose_;
+      key_to_last_ = Eigen::Isometry3d::Identity();
+      key_reference_inliers_ = 0;
+      failures_in_row_ = 0;
+      step.new_keyframe = step.reset = true;
+      ++keyframes_;
+      ++resets_;
+    }
     return step;
   }
+  failures_in_row_ = 0;
   ++tracked_;
   const Eigen::Isometry3d& key_curr = step.result.motion;
   step.increment = key_to_last_.inverse() * key_curr;

@@ -50,6 +50,7 @@ void validate(const RuntimeSettings& s) {
   validate(s.input);
   validate(s.pose_correction);
   validate(s.loop_closure);
+  validate(s.visual_odometry);
 }
 
 /// One controller -> navigator event (kBackground).
@@ -161,6 +162,7 @@ ExplorationRuntime::ExplorationRuntime(const Profile& profile, ChassisInterface&
     if (sensors_[i] == nullptr) fail(ErrorCode::kInvalidArgument, "ExplorationRuntime: sensor " + std::to_string(i) + " is null");
   if (settings_.loop_closure.enabled && settings_.pose_correction.enabled)
     loop_.emplace(settings_.loop_closure, profile_.exploration.cells, mapper_);
+  if (settings_.visual_odometry.enabled) visual_ = std::make_unique<VisualLocalization>(settings_.visual_odometry);
   if (settings_.execution == Execution::kBackground) {
     link_ = std::make_unique<Link>(*this);
     worker_ = std::make_unique<BackgroundWorker>(settings_.background_threads);
@@ -326,6 +328,7 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
   const OdometryMsg odom = ot->second;
   odometry_.erase(ot);
   const double stamp = set.stamps_s[n];
+  if (visual_) track_visual(in.images, set, now_s);
   if (map_t_restart_) {  // a new time base: the first set is due
     next_map_t_ = stamp;
     map_t_restart_ = false;
@@ -363,6 +366,33 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
   }
   for (std::size_t i = 0; i < n; ++i) sensors_[i]->recycle(std::move(in.images[i]));
 }
+
+void ExplorationRuntime::track_visual(const std::vector<RgbdImage>& images, const ApproximateTimeCore::Set& set, double now_s) {
+  const std::size_t n = sensors_.size();
+  double t = 0.0;
+  for (std::size_t i = 0; i < n; ++i) t += set.stamps_s[i];
+  t /= static_cast<double>(n);
+  if (last_visual_t_ >= 0.0 && t < last_visual_t_ + 0.999 / settings_.visual_odometry.rate_hz && t >= last_visual_t_) return;
+  last_visual_t_ = t;
+  std::vector<SensorFrame> views;
+  views.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (images[i].width == 0) {  // vision needs the same cameras every time: skip the set
+      ++stats_.visual_sets_incomplete;
+      return;
+    }
+    views.push_back(frame_view(images[i], profile_.sensors[i], profile_.sensors[i].T_robot_optical()));
+  }
+  visual_->frames(views, t);
+  stats_.visual = visual_->stats();
+  const LocalizationHealth h = visual_->health(now_s);
+  if (health_ && *health_ != h)
+    guard_.note(now_s, std::string("localization health: ") + to_string(*health_) + " -> " + to_string(h) +
+                           (h == LocalizationHealth::kGood ? "" : " (the wheels carry the pose)"));
+  health_ = h;
+}
+
+std::optional<LocalizationHealth> ExplorationRuntime::localization_health() const noexcept { return health_; }
 
 void ExplorationRuntime::submit_map_update(MapInput&& input) {
   map_in_flight_ = true;
@@ -548,6 +578,7 @@ void ExplorationRuntime::take_inputs(double now_s) {
       v = guard_.odometry(m, now_s);
     }
     if (v != InputGuard::Verdict::kAccept) continue;
+    if (visual_) m.pose = visual_->odometry(m);  // the fused odometry replaces the wheels' from here on
     odom_pose_ = m.pose;
     pose_ = compose(correction_, m.pose);
     if (odom_history_.empty() || m.stamp_s > odom_history_.back().stamp_s) odom_history_.push_back(m);

@@ -88,7 +88,8 @@ void make_visual_frame(std::span<const SensorFrame> frames, const VisualFrameSet
 struct VisualOdometrySettings {
   DescriptorMatchSettings match;
   /// > 0: guided matching, candidates within this of where the initial guess puts the previous
-  /// feature's 3D point [px]; 0: brute force. [0, 1000]
+  /// feature's 3D point [px] - and brute force again when that fails (a guess too far off);
+  /// 0: brute force. [0, 1000]
   float guided_radius_px = 0.0f;
   bool fundamental_filter = true;        ///< step b on or off
   float fundamental_threshold_px = 1.5f; ///< epipolar distance of an inlier [px], (0, 50]

@@ -37,10 +37,10 @@ namespace duet {
 struct PoseEkfSettings {
   float wheel_speed_sigma = 0.02f;     ///< the wheels' speed noise per message [m/s], (0, 10]
   float wheel_yaw_rate_sigma = 0.05f;  ///< their yaw-rate noise per message [rad/s], (0, 10]
-  float gyro_sigma = 0.01f;            ///< a gyro's yaw-rate noise per message [rad/s], (0, 10]
+  float gyro_sigma = 0.002f;           ///< a gyro's yaw-rate noise per message [rad/s], (0, 10] (at 50 Hz: 2.8e-4 rad/s/sqrt(Hz), a consumer MEMS gyro)
   float wheel_scale_sigma = 0.05f;     ///< prior std of the speed scale k (about 1), (0, 1]
   float wheel_bias_sigma = 0.05f;      ///< prior std of the yaw-rate bias b [rad/s], (0, 1]
-  float wheel_scale_walk = 0.001f;     ///< k's random walk [1/sqrt(s)], [0, 1]
+  float wheel_scale_walk = 0.02f;      ///< k's random walk [1/sqrt(s)], [0, 1] (slip on a new floor changes it within seconds)
   float wheel_bias_walk = 0.001f;      ///< b's random walk [rad/s/sqrt(s)], [0, 1]
   float visual_min_sigma_m = 0.005f;   ///< floor of a visual increment's position std [m], [0, 1]
   float visual_min_sigma_deg = 0.2f;   ///< floor of its heading std [deg], [0, 10]

@@ -12,7 +12,11 @@
 /// slow motion from adding up per-frame noise (drift grows with location points, not frames).
 /// A frame that fails (blank or dark views, too few inliers) leaves the location point in place:
 /// the next frame is matched against it again, and the guess carries the pose meanwhile (the
-/// EKF fuses the wheels) - one bad frame does not break the chain.
+/// EKF fuses the wheels) - one bad frame does not break the chain. After reset_after_failures
+/// failures in a row, or once the guess has moved the robot beyond the location-point
+/// thresholds, the view has left the location point for good: the next failing frame with
+/// enough features (2 x min_inliers with depth) becomes the location point (Step::reset), and
+/// tracking starts over from the guessed pose.
 ///
 /// Frames: pose() is T_start_robot, the robot's 3D pose in the robot frame of its first frame.
 /// Thread safety: one thread at a time.
@@ -34,6 +38,7 @@ struct VisualOdometerSettings {
   float keyframe_translation_m = 0.30f;  ///< new location point after this much motion [m], (0, 10]
   float keyframe_rotation_deg = 15.0f;   ///< ... or this much rotation [deg], (0, 180]
   float keyframe_inlier_ratio = 0.4f;    ///< ... or inliers below this share of the first match's, [0, 1]
+  int reset_after_failures = 3;          ///< failures in a row before a new location point is forced, [1, 1000]
 };
 /// Throws duet::Error(kInvalidArgument) naming the bad field.
 void validate(const VisualOdometerSettings& s);
@@ -46,6 +51,7 @@ class VisualOdometer {
     VisualOdometryResult result;  ///< of this frame against the location point
     bool first = false;           ///< the first frame: it became the location point
     bool new_keyframe = false;    ///< this frame became the location point
+    bool reset = false;           ///< ... because tracking had failed (the chain starts over from the guess)
     /// T_prev_curr: the motion since the previous frame - the estimate when result is kOk,
     /// else the guess.
     Eigen::Isometry3d increment = Eigen::Isometry3d::Identity();
@@ -66,6 +72,7 @@ class VisualOdometer {
   [[nodiscard]] std::size_t tracked() const noexcept { return tracked_; }
   [[nodiscard]] std::size_t failed() const noexcept { return failed_; }
   [[nodiscard]] std::size_t keyframes() const noexcept { return keyframes_; }
+  [[nodiscard]] std::size_t resets() const noexcept { return resets_; }
   /// Forgets the location point and the pose (the next frame starts over at identity).
   void reset();
 
@@ -77,7 +84,8 @@ class VisualOdometer {
   Eigen::Isometry3d key_pose_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d key_to_last_ = Eigen::Isometry3d::Identity();  ///< T_key_prev
   std::size_t key_reference_inliers_ = 0;  ///< inliers of the first frame tracked against the location point
-  std::size_t tracked_ = 0, failed_ = 0, keyframes_ = 0;
+  std::size_t tracked_ = 0, failed_ = 0, keyframes_ = 0, resets_ = 0;
+  int failures_in_row_ = 0;
 };
 
 }  // namespace duet

@@ -29,6 +29,7 @@
 /// Thread safety: one thread (the control thread) calls tick() and the accessors. In
 /// kBackground, mapper(), explorer() and loop_closer() belong to the background task: read
 /// them only after drain(); state(), stop_status(), explorer_stats() and map_grid() are safe.
+#include <duet/runtime/localization/visual_localization.hpp>
 #include <duet/runtime/config/profile.hpp>
 #include <duet/runtime/robot/runtime_settings.hpp>
 #include <duet/runtime/localization/loop_closure.hpp>
@@ -73,6 +74,8 @@ struct RuntimeStats {
   std::uint64_t sets_with_missing = 0;   ///< sets mapped with a missing frame (silent or garbled sensor)
   std::uint64_t blind_holds = 0;         ///< control periods held still: no frame mapped for too long
   std::size_t relocalizations = 0;       ///< wide re-matches that moved the pose (pushed, slipped)
+  VisualLocalizationStats visual;        ///< visual odometry + EKF (all 0 when localization.visual_odometry is off)
+  std::size_t visual_sets_incomplete = 0;  ///< sets vision skipped: a sensor's frame missing
 };
 
 /// Wall-clock timing of the loop (meaningful when the loop is paced by the wall clock).
@@ -122,6 +125,8 @@ class ExplorationRuntime {
   [[nodiscard]] const Pose2& pose() const noexcept { return pose_; }
   /// The correction map <- odometry frame (identity until a match is accepted).
   [[nodiscard]] const Pose2& correction() const noexcept { return correction_; }
+  /// Visual odometry's health (localization.visual_odometry on), else nullopt.
+  [[nodiscard]] std::optional<LocalizationHealth> localization_health() const noexcept;
   /// The estimated drift rate of the odometry's heading [rad/s].
   [[nodiscard]] float heading_rate() const noexcept { return heading_rate_; }
   [[nodiscard]] const Twist& last_command() const noexcept { return last_cmd_; }
@@ -169,6 +174,8 @@ class ExplorationRuntime {
   void restart_time();
   void note_relocalization(std::size_t count, const Pose2& offset, std::pair<float, float> scores, double now_s);
   void take_inputs(double now_s);
+  /// Visual odometry on a synchronised set (all sensors' frames), the EKF's update, the health.
+  void track_visual(const std::vector<RgbdImage>& images, const ApproximateTimeCore::Set& set, double now_s);
 
   CameraPoints camera_points_;  ///< the map update's frames, back-projected once (owned by whoever runs map_update)
   Profile profile_;
@@ -182,6 +189,10 @@ class ExplorationRuntime {
   ObstacleMemory memory_;
   std::optional<LoopCloser> loop_;
   // ---- the control thread
+  std::unique_ptr<VisualLocalization> visual_;  ///< localization.visual_odometry: wheels + vision, the odometry the rest sees
+  std::optional<LocalizationHealth> health_;
+  double last_visual_t_ = -1.0;  ///< stamp of the last set vision tracked
+  double last_now_s_ = 0.0;
   InputGuard guard_;
   ApproximateTimeCore sync_;
   std::unordered_map<std::uint64_t, RgbdImage> frames_;     ///< payloads waiting in the synchronizer, by id
@@ -192,7 +203,7 @@ class ExplorationRuntime {
   double last_seen_t_ = -1.0;   ///< runtime time of the last set with a real frame (-1: none yet)
   bool blind_ = false;
   Pose2 pose_;
-  Pose2 odom_pose_;             ///< latest raw wheel odometry
+  Pose2 odom_pose_;             ///< latest odometry (the wheels', or fused with vision)
   static constexpr std::size_t kOdomHistory = 256;  ///< odometry kept for interpolation (5 s at 50 Hz)
   std::deque<OdometryMsg> odom_history_;
   Pose2 correction_;

@@ -6,6 +6,7 @@
 /// runtime, localization, exploration and control sections).
 #include <duet/runtime/localization/loop_closure_settings.hpp>
 #include <duet/runtime/localization/pose_correction_settings.hpp>
+#include <duet/runtime/localization/visual_localization_settings.hpp>
 #include <duet/runtime/navigation/explorer_settings.hpp>
 #include <duet/runtime/robot/input_guard_settings.hpp>
 #include <duet/runtime/robot/synchronizer.hpp>
@@ -31,6 +32,8 @@ struct RuntimeSettings {
   PoseCorrectionSettings pose_correction;
   /// Submaps, loop search and pose-graph optimisation (loop_closure.hpp); needs the pose correction.
   LoopClosureSettings loop_closure;
+  /// Visual odometry fused with the wheels by an EKF (visual_localization.hpp); off by default.
+  VisualLocalizationSettings visual_odometry;
 };
 void validate(const RuntimeSettings& s);
 

@@ -135,6 +135,10 @@ struct ExploreSummary {
   double pose_error_m = 0.0;             ///< |pose estimate (corrected odometry) - truth| at the end [m]
   double pose_error_max_m = 0.0;         ///< max over the run of |pose estimate - truth| [m]
   double heading_error_deg = 0.0;        ///< |pose estimate's heading - truth's| at the end [deg]
+  bool visual_odometry = false;          ///< localization.visual_odometry was on
+  VisualLocalizationStats visual;        ///< its counters
+  std::size_t visual_sets_incomplete = 0;
+  std::string localization_health;       ///< at the end: good / degraded / lost ("" without vision)
   std::size_t scan_matches = 0;          ///< map updates whose scan match was accepted
   std::size_t scan_match_rejected = 0;   ///< map updates whose scan match was not (correction kept)
   double scan_match_time_s = 0.0;        ///< wall time in the scan-to-map correction [s]

@@ -1,0 +1,85 @@
+#pragma once
+/// @file visual_localization.hpp
+/// The localization room's odometry (paper §2.1): the wheels and the visual front end fused by
+/// the EKF, as the runtime runs it.
+///  - odometry(m): each wheel odometry message moves the EKF on the wheels' increment since the
+///    previous message (the robot-frame distance and heading change over the stamps' interval;
+///    pose_ekf.hpp) and returns the fused pose - the runtime's odometry from then on.
+///  - frames(views, t): each synchronised set of RGB-D frames is tracked against the last
+///    location point (visual_odometer.hpp) with the EKF's motion since the previous set as the
+///    guess; an accepted motion is the EKF's visual update (planar part, its covariance; gated),
+///    and a new location point re-clones the EKF's pose.
+///    Time: a set reaches the runtime after the odometry of its stamp (the synchronizer waits
+///    for the message after it), so the EKF is ahead of the frames by that lag - 1.4 deg at
+///    0.5 rad/s and a 50 ms lag, per update, enough to bias the heading. The fused poses of the
+///    last odometry messages are kept; the increment the camera measured between the location
+///    point's stamp and this set's is carried to the clone's and the EKF's times by the EKF's
+///    own motion over each lag (z' = dc^-1 z dn, dc and dn from the interpolated history).
+///  - health(now): good - a visual update was accepted within degraded_after_s with at least
+///    good_min_inliers inliers; degraded - vision failed, weak or gated out since then, the
+///    wheels (calibrated by vision while it saw) carry the pose; lost - no accepted update for
+///    lost_after_s (or none ever after lost_after_s of running).
+/// The output is an odom frame in the sense of REP 105: continuous, never jumping more than a
+/// gated visual update moves it. The scan-to-map correction and loop closure stay on top of it
+/// as the map <- odom correction (pose_corrector.hpp, loop_closure.hpp).
+/// Thread safety: one thread at a time.
+#include <duet/runtime/localization/visual_localization_settings.hpp>
+#include <duet/runtime/robot/robot_io.hpp>
+
+#include <cstddef>
+#include <deque>
+#include <utility>
+#include <optional>
+#include <span>
+
+namespace duet {
+
+enum class LocalizationHealth { kGood = 0, kDegraded = 1, kLost = 2 };
+[[nodiscard]] const char* to_string(LocalizationHealth h) noexcept;
+
+struct VisualLocalizationStats {
+  std::size_t sets = 0;            ///< frame sets tracked
+  std::size_t accepted = 0;        ///< visual updates the EKF took
+  std::size_t gated = 0;           ///< ... it rejected (Mahalanobis gate)
+  std::size_t failed = 0;          ///< sets the odometry could not track, of which:
+  std::size_t too_few_features = 0;  ///< blank, dark or featureless views (or no depth under the features)
+  std::size_t too_few_matches = 0;
+  std::size_t too_few_inliers = 0;
+  std::size_t location_points = 0;
+  std::size_t resets = 0;          ///< location points forced after failures (the chain started over)
+  std::size_t last_inliers = 0;
+  double time_s = 0.0;             ///< wall time in frames() [s]
+};
+
+class VisualLocalization {
+ public:
+  explicit VisualLocalization(const VisualLocalizationSettings& settings);
+
+  /// One wheel odometry message; returns the fused pose (the first message sets the start).
+  Pose2 odometry(const OdometryMsg& m);
+  /// One synchronised set (at least one frame with colour for vision to work), taken at t [s].
+  void frames(std::span<const SensorFrame> frames, double t);
+
+  [[nodiscard]] Pose2 pose() const noexcept { return ekf_.pose(); }
+  [[nodiscard]] Twist twist() const noexcept { return ekf_.twist(); }
+  [[nodiscard]] LocalizationHealth health(double now_s) const noexcept;
+  [[nodiscard]] const VisualLocalizationStats& stats() const noexcept { return stats_; }
+  [[nodiscard]] const PoseEkf& ekf() const noexcept { return ekf_; }
+
+ private:
+  VisualLocalizationSettings settings_;
+  VisualOdometer odometer_;
+  PoseEkf ekf_;
+  /// The fused pose at t, interpolated in the recent history (the nearest end outside it).
+  [[nodiscard]] Pose2 pose_at(double t) const;
+
+  std::optional<OdometryMsg> last_odom_;
+  std::deque<std::pair<double, Pose2>> history_;  ///< (stamp, fused pose) of the last messages
+  Pose2 last_track_pose_;          ///< the fused pose at the previous set's stamp
+  Pose2 clone_lag_;                ///< the EKF's motion from the location point's stamp to the clone's time
+  bool tracking_ = false;
+  double start_s_ = -1.0, last_ok_s_ = -1.0;
+  VisualLocalizationStats stats_;
+};
+
+}  // namespace duet

@@ -1,0 +1,160 @@
+#include <duet/kernels/error.hpp>
+#include <duet/runtime/localization/visual_localization.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+namespace duet {
+namespace {
+
+Eigen::Isometry3d to_iso(const Pose2& p) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(p.theta, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(p.x, p.y, 0.0);
+  return T;
+}
+
+/// a^-1 * b for planar poses.
+Pose2 between(const Pose2& a, const Pose2& b) {
+  const float c = std::cos(a.theta), s = std::sin(a.theta), dx = b.x - a.x, dy = b.y - a.y;
+  return {c * dx + s * dy, -s * dx + c * dy, std::remainder(b.theta - a.theta, 2.0f * std::numbers::pi_v<float>)};
+}
+
+Eigen::Vector3d compose(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const double c = std::cos(a(2)), s = std::sin(a(2));
+  return {a(0) + c * b(0) - s * b(1), a(1) + s * b(0) + c * b(1), std::remainder(a(2) + b(2), 2.0 * std::numbers::pi)};
+}
+Eigen::Vector3d vec(const Pose2& p) { return {p.x, p.y, p.theta}; }
+Eigen::Vector3d inverse(const Eigen::Vector3d& a) {
+  const double c = std::cos(a(2)), s = std::sin(a(2));
+  return {-(c * a(0) + s * a(1)), -(-s * a(0) + c * a(1)), -a(2)};
+}
+
+double wall_s() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+
+}  // namespace
+
+const char* to_string(LocalizationHealth h) noexcept {
+  switch (h) {
+    case LocalizationHealth::kGood: return "good";
+    case LocalizationHealth::kDegraded: return "degraded";
+    case LocalizationHealth::kLost: return "lost";
+  }
+  return "unknown";
+}
+
+void validate(const VisualLocalizationSettings& s) {
+  validate(s.odometer);
+  validate(s.ekf);
+  const std::string w = "visual localization settings: ";
+  if (s.good_min_inliers < 0 || s.good_min_inliers > 100000)
+    fail(ErrorCode::kInvalidArgument, w + "good_min_inliers must be in [0, 100000], got " + std::to_string(s.good_min_inliers));
+  if (!(s.degraded_after_s > 0.0 && s.degraded_after_s <= 3600.0))
+    fail(ErrorCode::kInvalidArgument, w + "degraded_after_s must be in (0, 3600], got " + std::to_string(s.degraded_after_s));
+  if (!(s.rate_hz > 0.0 && s.rate_hz <= 1000.0))
+    fail(ErrorCode::kInvalidArgument, w + "rate_hz must be in (0, 1000], got " + std::to_string(s.rate_hz));
+  if (!(s.lost_after_s >= s.degraded_after_s && s.lost_after_s <= 3600.0))
+    fail(ErrorCode::kInvalidArgument, w + "lost_after_s must be in [degraded_after_s, 3600], got " + std::to_string(s.lost_after_s));
+}
+
+VisualLocalization::VisualLocalization(const VisualLocalizationSettings& settings)
+    : settings_((validate(settings), settings)), odometer_(settings.odometer), ekf_(settings.ekf) {}
+
+Pose2 VisualLocalization::pose_at(double t) const {
+  if (history_.empty()) return ekf_.pose();
+  if (t <= history_.front().first) return history_.front().second;
+  if (t >= history_.back().first) return history_.back().second;
+  for (std::size_t k = 1; k < history_.size(); ++k) {
+    const auto& [ta, a] = history_[k - 1];
+    const auto& [tb, b] = history_[k];
+    if (t > tb) continue;
+    const float u = tb > ta ? static_cast<float>((t - ta) / (tb - ta)) : 0.0f;
+    const Pose2 d = between(a, b);
+    return compose(a, Pose2{u * d.x, u * d.y, u * d.theta});
+  }
+  return history_.back().second;
+}
+
+Pose2 VisualLocalization::odometry(const OdometryMsg& m) {
+  auto remember = [&] {
+    history_.emplace_back(m.stamp_s, ekf_.pose());
+    while (history_.size() > 64) history_.pop_front();  // > 1 s at 50 Hz: longer than any set's lag
+  };
+  if (!last_odom_) {
+    ekf_.reset(m.pose);
+    last_odom_ = m;
+    if (start_s_ < 0.0) start_s_ = m.stamp_s;
+    remember();
+    return ekf_.pose();
+  }
+  const double dt = m.stamp_s - last_odom_->stamp_s;
+  if (dt > 0.0) {
+    // The wheels' increment in the previous robot frame, as a speed and a yaw rate over dt.
+    const Pose2& a = last_odom_->pose;
+    const float c = std::cos(a.theta), s = std::sin(a.theta);
+    const double dx = c * (m.pose.x - a.x) + s * (m.pose.y - a.y);
+    const double dth = std::remainder(m.pose.theta - a.theta, 2.0f * std::numbers::pi_v<float>);
+    ekf_.predict(dt, dx / dt, dth / dt, settings_.odometry_heading_from_gyro);
+    last_odom_ = m;
+    remember();
+  }
+  return ekf_.pose();
+}
+
+void VisualLocalization::frames(std::span<const SensorFrame> frames, double t) {
+  const double w0 = wall_s();
+  if (start_s_ < 0.0) start_s_ = t;
+  const Pose2 at_frames = pose_at(t);               // the fused pose when the frames were taken
+  const Pose2 lag = between(at_frames, ekf_.pose());  // the EKF's motion since then
+  const Eigen::Isometry3d guess =
+      tracking_ ? to_iso(last_track_pose_).inverse() * to_iso(at_frames) : Eigen::Isometry3d::Identity();
+  const VisualOdometer::Step step = odometer_.track(frames, guess);
+  ++stats_.sets;
+  last_track_pose_ = at_frames;
+  tracking_ = true;
+  if (step.first) {
+    ekf_.clone();
+    clone_lag_ = lag;
+    ++stats_.location_points;
+    stats_.time_s += wall_s() - w0;
+    return;
+  }
+  stats_.last_inliers = step.result.inliers;
+  if (step.result.status != VisualOdometryStatus::kOk) {
+    ++stats_.failed;
+    switch (step.result.status) {
+      case VisualOdometryStatus::kTooFewFeatures: ++stats_.too_few_features; break;
+      case VisualOdometryStatus::kTooFewMatches: ++stats_.too_few_matches; break;
+      default: ++stats_.too_few_inliers; break;
+    }
+  } else {
+    const Eigen::Isometry3d& M = step.result.motion;  // T_key_curr (3D), between the frames' stamps
+    const Eigen::Vector3d z(M.translation().x(), M.translation().y(), std::atan2(M.linear()(1, 0), M.linear()(0, 0)));
+    // Carried to the clone's and the EKF's times: z' = lag_clone^-1 * z * lag_now.
+    const Eigen::Vector3d d = compose(compose(inverse(vec(clone_lag_)), z), vec(lag));
+    if (ekf_.update_visual(d, planar_covariance(M, step.result.covariance))) {
+      ++stats_.accepted;
+      if (static_cast<int>(step.result.inliers) >= settings_.good_min_inliers) last_ok_s_ = t;
+    } else {
+      ++stats_.gated;
+    }
+  }
+  if (step.new_keyframe) {
+    ekf_.clone();
+    clone_lag_ = lag;
+    ++stats_.location_points;
+    stats_.resets += step.reset ? 1 : 0;
+  }
+  stats_.time_s += wall_s() - w0;
+}
+
+LocalizationHealth VisualLocalization::health(double now_s) const noexcept {
+  const double since = last_ok_s_ >= 0.0 ? now_s - last_ok_s_ : (start_s_ >= 0.0 ? now_s - start_s_ : 0.0);
+  if (since > settings_.lost_after_s) return LocalizationHealth::kLost;
+  if (since > settings_.degraded_after_s) return LocalizationHealth::kDegraded;
+  return LocalizationHealth::kGood;
+}
+
+}  // namespace duet

@@ -1,0 +1,115 @@
+// Visual odometry in the loop (localization.visual_odometry): the simulated lab tracked by
+// vision and the wheels through the EKF; slipping wheels held by vision; both cameras blacked out
+// (a featureless stretch): health falls, the wheels carry the pose without a jump, no collision,
+// and health comes back when the cameras do. The scan-to-map correction is off in these runs so
+// the odometry alone is measured.
+#include <duet/kernels/error.hpp>
+#include <duet/runtime/config/profile.hpp>
+#include <duet/runtime/localization/visual_localization.hpp>
+#include <duet/sim/sim_explore.hpp>
+#include <duet/sim/world.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+namespace duet {
+namespace {
+
+sim::ExploreSettings vo_settings(std::uint64_t seed, double max_time, bool vision) {
+  sim::ExploreSettings s;
+  s.runtime = builtin_profile("dual_kinect_kobuki").runtime;
+  s.seed = seed;
+  s.max_time_s = max_time;
+  s.sensor_rate_hz = 5.0;
+  s.runtime.pose_correction.enabled = false;
+  s.runtime.visual_odometry.enabled = vision;
+  return s;
+}
+
+TEST(VisualLocalization, TracksTheLabInTheLoop) {
+  sim::SimExplore run(sim::resolve_world("lab"), builtin_profile("dual_kinect_kobuki"), vo_settings(2, 40.0, true));
+  run.run();
+  const auto s = run.summary();
+  ASSERT_TRUE(s.visual_odometry);
+  EXPECT_GE(s.visual.sets, 190u);  // 5 Hz for 40 s
+  EXPECT_GE(s.visual.accepted, s.visual.sets * 9 / 10) << "failed " << s.visual.failed << " gated " << s.visual.gated;
+  EXPECT_EQ(s.localization_health, "good");
+  EXPECT_LT(s.pose_error_max_m, 0.1);
+  EXPECT_EQ(s.collisions, 0u);
+  ASSERT_TRUE(run.runtime().localization_health().has_value());
+}
+
+TEST(VisualLocalization, VisionHoldsSlippingWheels) {
+  // The wheels report 1.3 x the distance from 5 s to 55 s.
+  auto go = [](bool vision) {
+    auto st = vo_settings(3, 60.0, vision);
+    st.faults = {"wheel_slip@5+50=1.3"};
+    sim::SimExplore run(sim::resolve_world("lab"), builtin_profile("dual_kinect_kobuki"), st);
+    run.run();
+    return run.summary();
+  };
+  const auto wheels = go(false), fused = go(true);
+  std::printf("wheel slip 1.3x for 50 s: pose error max %.3f m on the wheels, %.3f m fused (end %.3f / %.3f m)\n",
+              wheels.pose_error_max_m, fused.pose_error_max_m, wheels.pose_error_m, fused.pose_error_m);
+  EXPECT_GT(wheels.pose_error_max_m, 0.3);
+  EXPECT_LT(fused.pose_error_max_m, 0.3 * wheels.pose_error_max_m);
+  EXPECT_EQ(fused.collisions, 0u);
+}
+
+TEST(VisualLocalization, BlackCamerasDegradeHealthAndTheWheelsCarryOnWithoutAJump) {
+  auto st = vo_settings(4, 50.0, true);
+  st.faults = {"color_black:1@15+15", "color_black:2@15+15"};
+  sim::SimExplore run(sim::resolve_world("lab"), builtin_profile("dual_kinect_kobuki"), st);
+  std::map<std::string, int> seen_during, seen_after;
+  while (run.step()) {
+    const auto h = run.runtime().localization_health();
+    if (!h) continue;
+    if (run.now_s() > 17.0 && run.now_s() < 30.0) ++seen_during[to_string(*h)];
+    if (run.now_s() > 33.0) ++seen_after[to_string(*h)];
+  }
+  const auto s = run.summary();
+  EXPECT_GT(seen_during["degraded"] + seen_during["lost"], 0) << "health never fell while the cameras were black";
+  EXPECT_EQ(seen_during["good"], 0);
+  EXPECT_GT(seen_after["good"], 0) << "health did not come back";
+  EXPECT_GT(s.visual.too_few_features, 40u);  // ~75 black sets
+  // No jump: consecutive estimated poses (one control period, 50 ms) never further apart than
+  // the chassis' top speed allows plus 1 cm, during and after the blackout.
+  const auto& traj = run.estimated_trajectory();
+  double worst = 0.0;
+  for (std::size_t k = 1; k < traj.size(); ++k) {
+    const double d = std::hypot(traj[k].pose.x - traj[k - 1].pose.x, traj[k].pose.y - traj[k - 1].pose.y);
+    const double dt = traj[k].t_s - traj[k - 1].t_s;
+    worst = std::max(worst, d - 0.7 * dt);
+  }
+  EXPECT_LT(worst, 0.01);
+  EXPECT_LT(s.pose_error_max_m, 0.15);
+  EXPECT_EQ(s.collisions, 0u);
+}
+
+TEST(VisualLocalization, BadSettingsAreNamed) {
+  VisualLocalizationSettings s;
+  s.rate_hz = 0.0;
+  EXPECT_THROW(VisualLocalization{s}, Error);
+  s = {};
+  s.lost_after_s = 0.5;  // below degraded_after_s
+  try {
+    VisualLocalization v(s);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("lost_after_s"), std::string::npos) << e.what();
+  }
+  // Through the profile: a key of localization.visual_odometry, named with its path.
+  try {
+    const Profile base = builtin_profile("dual_kinect_kobuki");
+    const ProfileOverlay bad = set_overlay("localization.visual_odometry.rate_hz=-1");
+    (void)parse_profile(to_yaml(base), "p.yaml", std::span(&bad, 1));
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("visual_odometry"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace duet
