@@ -260,6 +260,10 @@ typedef struct duet_runtime_status {
   duet_pose2 goal;               /* the current goal (map frame) */
   size_t path_points;            /* points of the current path (duet_runtime_get_path) */
   size_t map_updates;            /* map updates so far */
+  int visual_odometry;           /* 1: localization.visual_odometry is on (vision fused with the wheels by an EKF) */
+  enum duet_pose_health odometry_health;  /* vision's health when on: GOOD - tracked within degraded_after_s;
+                                           * DEGRADED - vision fails or is weak, the wheels carry the pose;
+                                           * LOST - no visual update for lost_after_s. Off: DEGRADED (wheels only) */
 } duet_runtime_status;
 
 /* The status of the last control period into *out. Never waits for the control loop. */

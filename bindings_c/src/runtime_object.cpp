@@ -174,6 +174,10 @@ void Runtime::publish_locked(double now) {
   s.state = to_c(rt->state());
   s.paused = 0;
   s.map_updates = st.sets_integrated;
+  s.visual_odometry = profile.runtime.visual_odometry.enabled ? 1 : 0;
+  s.odometry_health = DUET_POSE_DEGRADED;
+  if (const auto h = rt->localization_health())
+    s.odometry_health = *h == LocalizationHealth::kGood ? DUET_POSE_GOOD : *h == LocalizationHealth::kDegraded ? DUET_POSE_DEGRADED : DUET_POSE_LOST;
   std::vector<float> path;
   const std::optional<Pose2> goal = rt->goal();
   for (const auto& p : rt->path()) path.insert(path.end(), {p.x(), p.y()});

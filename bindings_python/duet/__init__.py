@@ -344,7 +344,8 @@ class Runtime(_Handle):
                 "map_from_odom": (s.map_from_odom.x, s.map_from_odom.y, s.map_from_odom.theta),
                 "health": POSE_HEALTH[s.health], "state": EXPLORER_STATES[s.state], "paused": bool(s.paused),
                 "goal": (s.goal.x, s.goal.y, s.goal.theta) if s.has_goal else None,
-                "path_points": s.path_points, "map_updates": s.map_updates}
+                "path_points": s.path_points, "map_updates": s.map_updates,
+                "visual_odometry": bool(s.visual_odometry), "odometry_health": POSE_HEALTH[s.odometry_health]}
 
     def stop_detail(self):
         n = _c.lib.duet_runtime_get_stop_detail(self.handle, None, 0)

@@ -37,7 +37,8 @@ class SensorInfo(Structure):  # duet_runtime_sensor_info
 class RuntimeStatus(Structure):  # duet_runtime_status
     _fields_ = [("time_s", c_double), ("command", Twist), ("pose", Pose2), ("map_from_odom", Pose2),
                 ("health", c_int), ("state", c_int), ("paused", c_int), ("has_goal", c_int), ("goal", Pose2),
-                ("path_points", c_size_t), ("map_updates", c_size_t)]
+                ("path_points", c_size_t), ("map_updates", c_size_t),
+                ("visual_odometry", c_int), ("odometry_health", c_int)]
 
 
 _STATS_FIELDS = ["frames_pushed", "frames_queue_overflow", "frames_paused", "odometry_pushed",

@@ -114,6 +114,12 @@ void VisualLocalization::frames(std::span<const SensorFrame> frames, double t) {
   ++stats_.sets;
   last_track_pose_ = at_frames;
   tracking_ = true;
+  if (!odometer_.has_keyframe()) {  // nothing to track from yet (a blank first view)
+    ++stats_.failed;
+    ++stats_.too_few_features;
+    stats_.time_s += wall_s() - w0;
+    return;
+  }
   if (step.first) {
     ekf_.clone();
     clone_lag_ = lag;

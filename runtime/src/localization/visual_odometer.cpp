@@ -39,6 +39,11 @@ VisualOdometer::Step VisualOdometer::track(std::span<const SensorFrame> frames, 
   Step step;
   step.increment = guess;
   if (!has_key_) {
+    if (current_.features_with_depth() < 2 * static_cast<std::size_t>(settings_.odometry.min_inliers)) {
+      ++failed_;  // nothing to track from: the next frame gets its chance to be the first
+      step.result.status = VisualOdometryStatus::kTooFewFeatures;
+      return step;
+    }
     std::swap(key_, current_);
     has_key_ = true;
     step.first = step.new_keyframe = true;

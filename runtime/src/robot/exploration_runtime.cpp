@@ -385,6 +385,11 @@ void ExplorationRuntime::track_visual(const std::vector<RgbdImage>& images, cons
   }
   visual_->frames(views, t);
   stats_.visual = visual_->stats();
+  update_health(now_s);
+}
+
+void ExplorationRuntime::update_health(double now_s) {
+  if (!visual_) return;
   const LocalizationHealth h = visual_->health(now_s);
   if (health_ && *health_ != h)
     guard_.note(now_s, std::string("localization health: ") + to_string(*health_) + " -> " + to_string(h) +
@@ -529,6 +534,7 @@ void ExplorationRuntime::tick(double now_s) {
       odometry_.erase(d.id);
     }
   }
+  update_health(now_s);
   // 3. Control on the pose estimate - held still while no frame has been mapped for long: the
   // map the controller steers by is no longer the world (every sensor silent or garbled).
   if (last_seen_t_ < 0.0) last_seen_t_ = now_s;

@@ -49,7 +49,7 @@ class VisualOdometer {
 
   struct Step {
     VisualOdometryResult result;  ///< of this frame against the location point
-    bool first = false;           ///< the first frame: it became the location point
+    bool first = false;           ///< the first frame with enough features (2 x min_inliers with depth): it became the location point
     bool new_keyframe = false;    ///< this frame became the location point
     bool reset = false;           ///< ... because tracking had failed (the chain starts over from the guess)
     /// T_prev_curr: the motion since the previous frame - the estimate when result is kOk,

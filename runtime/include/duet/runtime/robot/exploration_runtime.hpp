@@ -176,6 +176,7 @@ class ExplorationRuntime {
   void take_inputs(double now_s);
   /// Visual odometry on a synchronised set (all sensors' frames), the EKF's update, the health.
   void track_visual(const std::vector<RgbdImage>& images, const ApproximateTimeCore::Set& set, double now_s);
+  void update_health(double now_s);  ///< vision's health at now_s, a change logged
 
   CameraPoints camera_points_;  ///< the map update's frames, back-projected once (owned by whoever runs map_update)
   Profile profile_;
