@@ -124,7 +124,9 @@ TEST(PoseEkf, VisionCorrectsABiasedWheelAndTheGateRejectsAJump) {
   // order of magnitude better than the wheels.
   EXPECT_GT(wheel_err, 1.0);  // 18 m at 8 % plus a heading drift
   EXPECT_LT(fused_err, 0.1 * wheel_err) << "fused " << fused_err << " wheels " << wheel_err << " chain " << chain_err;
-  EXPECT_LT(fused_err, chain_err + 0.05) << "fused " << fused_err << " chain " << chain_err;
+  // (0.40 m against 0.34 m with the default scale walk of 0.02/sqrt(s), which lets slip on a new
+  // floor in within seconds and trusts the wheels' scale less in between.)
+  EXPECT_LT(fused_err, 1.25 * chain_err + 0.05) << "fused " << fused_err << " chain " << chain_err;
   EXPECT_EQ(fused.visual_rejected(), rejected_jumps);
   EXPECT_EQ(fused.visual_accepted(), 300u);
   // Vision calibrated the wheels: they report 1.08 v (true = v / 1.08) and omega + 0.02.
