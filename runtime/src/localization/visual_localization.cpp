@@ -16,11 +16,8 @@ Eigen::Isometry3d to_iso(const Pose2& p) {
   return T;
 }
 
-/// a^-1 * b for planar poses.
-Pose2 between(const Pose2& a, const Pose2& b) {
-  const float c = std::cos(a.theta), s = std::sin(a.theta), dx = b.x - a.x, dy = b.y - a.y;
-  return {c * dx + s * dy, -s * dx + c * dy, std::remainder(b.theta - a.theta, 2.0f * std::numbers::pi_v<float>)};
-}
+/// a^-1 * b for planar poses (motion_model.hpp).
+Pose2 between(const Pose2& a, const Pose2& b) { return compose(inverse(a), b); }
 
 Eigen::Vector3d compose(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   const double c = std::cos(a(2)), s = std::sin(a(2));
