@@ -28,10 +28,9 @@ if [ "${DUET_SKIP_SANITIZERS:-0}" != 1 ]; then
 
   echo "== duet: ThreadSanitizer build and the threaded tests"
   export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$here/tests/tsan.supp"
-  DUET_BUILD_TYPE=RelWithDebInfo DUET_BUILD_TARGETS="test_runtime test_capi_threads" \
+  DUET_BUILD_TYPE=RelWithDebInfo DUET_BUILD_TARGETS="test_threads test_capi_threads" \
     "$here/scripts/setup.sh" "$here/build-tsan" -DDUET_SANITIZE_THREAD=ON -DDUET_BUILD_BENCH=OFF
-  (cd "$here/build-tsan" && ctest --output-on-failure -j "$jobs" --timeout 1800 \
-     -R '^(BackgroundWorker|BackgroundRuntime|Clock|CapiRuntimeThreads|PushRobot)\.')
+  (cd "$here/build-tsan" && ctest --output-on-failure -j "$jobs" --timeout 1800 -L '^test_(threads|capi_threads)$')
 
   echo "== duet: fuzzing, ${DUET_FUZZ_SECONDS:-20} s per target"
   FUZZ_SEED=1 FUZZ_BUILD="$here/build-fuzz" "$here/scripts/fuzz.sh" "${DUET_FUZZ_SECONDS:-20}"

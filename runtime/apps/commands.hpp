@@ -11,6 +11,9 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <Eigen/Geometry>
+
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,8 +31,11 @@ void add_run_command(CLI::App& app, int& exit_code);
 void add_replay_command(CLI::App& app, int& exit_code);
 void add_eval_traj_command(CLI::App& app, int& exit_code);
 /// `duet map` on a folder (map_command.cpp), for `duet replay` of a TUM RGB-D folder.
+/// `poses`: replaces the folder's (one per frame, nothing = not mapped), which is then read
+/// without them; `extra` joins summary.json.
 int run_map_folder(const std::string& input, const std::string& out, const std::string& profile, const std::string& layout, int threads,
-                   bool quiet);
+                   bool quiet, const std::vector<std::optional<Eigen::Isometry3f>>* poses = nullptr,
+                   const nlohmann::json& extra = nlohmann::json::object());
 
 /// summary.json's timing and input blocks: the runtime's (io/run_json.hpp), shared with duet_runtime_save.
 using detail::input_json;

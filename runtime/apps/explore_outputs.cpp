@@ -51,6 +51,8 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                 {"escapes", e.escapes},
                 {"cornered_escapes", e.cornered_escapes},
                 {"slowed_periods", e.slowed},
+                {"few_feature_periods", e.few_feature_periods},
+                {"feature_seeks", e.feature_seeks},
                 {"goals_moved", e.goals_moved},
                 {"relaxed_goals", e.relaxed_goals},
                 {"boxed_in_goals", e.boxed_in_goals},

@@ -22,6 +22,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -39,6 +40,10 @@ struct MapOptions {
   float grid_res = 0.0f;  // 0 = profile's
   int threads = 0;
   bool quiet = false;
+  // duet replay --poses vision: the folder is read without its poses, and these (one per frame;
+  // nothing: the frame is not mapped) take their place; `extra` joins summary.json.
+  const std::vector<std::optional<Eigen::Isometry3f>>* poses = nullptr;
+  nlohmann::json extra;
 };
 
 // "+x", "-y", "z", or "ux,uy,uz"; "auto" is handled by the caller.
@@ -61,9 +66,11 @@ Eigen::Vector3f parse_up(const std::string& s) {
 
 // Hand-held recordings are usually held roughly level: the mean of the cameras' up axes
 // (-y of the optical frame) in the world is a good estimate of the world's up direction.
-Eigen::Vector3f estimate_up(const RgbdDataset& ds) {
+template <class PoseOf>
+Eigen::Vector3f estimate_up(std::size_t frames, const PoseOf& pose_of) {
   Eigen::Vector3f sum = Eigen::Vector3f::Zero();
-  for (std::size_t i = 0; i < ds.size(); ++i) sum += ds.pose(i).linear() * Eigen::Vector3f(0.0f, -1.0f, 0.0f);
+  for (std::size_t i = 0; i < frames; ++i)
+    if (const auto T = pose_of(i)) sum += T->linear() * Eigen::Vector3f(0.0f, -1.0f, 0.0f);
   if (sum.norm() < 1e-3f) return Eigen::Vector3f::UnitZ();
   return sum.normalized();
 }
@@ -80,8 +87,15 @@ int run_map(const MapOptions& o) {
 
   RgbdDatasetOptions dopt;
   dopt.layout = o.layout;
+  dopt.require_poses = o.poses == nullptr;
   const RgbdDataset ds = RgbdDataset::open(o.input, dopt);
   if (ds.empty()) fail(ErrorCode::kInvalidArgument, o.input + ": no frames found");
+  if (o.poses && o.poses->size() != ds.size())
+    fail(ErrorCode::kInvalidArgument, o.input + ": " + std::to_string(o.poses->size()) + " poses for " + std::to_string(ds.size()) + " frames");
+  const auto pose_of = [&](std::size_t i) -> std::optional<Eigen::Isometry3f> {
+    if (o.poses) return (*o.poses)[i];
+    return ds.pose(i);
+  };
   const std::filesystem::path out(o.out);
   const StopSignals signals;  // SIGINT / SIGTERM from here on: stop after the current frame, save the map so far, say so
   prepare_output_dir(out);  // before the frames are mapped, not after
@@ -98,8 +112,10 @@ int run_map(const MapOptions& o) {
     if (o.up == "auto" || o.floor_z == "auto") {
       PointCloud all, raw, filtered;
       for (std::size_t i = 0; i < ds.size(); ++i) {
+        const auto T = pose_of(i);
+        if (!T) continue;
         const RgbdFrame f = ds.load(i);
-        const SensorFrame sf = f.sensor_frame(f.T_world_camera);
+        const SensorFrame sf = f.sensor_frame(*T);
         back_project(std::span<const SensorFrame>(&sf, 1), ms.back_projection, raw);
         voxel_filter(raw.points_view(), ColorsView(), ms.voxel_filter, filtered);
         all.points.insert(all.points.end(), filtered.points.begin(), filtered.points.end());
@@ -108,7 +124,7 @@ int run_map(const MapOptions& o) {
       if (merged.empty()) fail(ErrorCode::kInvalidArgument, o.input + ": no valid depth in any frame");
       estimate_normals(merged, ms.normals);
     }
-    const Eigen::Vector3f up = o.up == "auto" ? refine_up(merged, estimate_up(ds)) : parse_up(o.up);
+    const Eigen::Vector3f up = o.up == "auto" ? refine_up(merged, estimate_up(ds.size(), pose_of)) : parse_up(o.up);
     const Eigen::Isometry3f T_map_world = gravity_alignment(up);
     if (!o.quiet)
       std::fprintf(stderr, "duet map: %s (%s layout, %zu frames), up = (%.3f, %.3f, %.3f)%s\n", o.input.c_str(),
@@ -136,12 +152,14 @@ int run_map(const MapOptions& o) {
     for (std::size_t i = 0; i < ds.size(); ++i) {
       if ((stopped_by = StopSignals::received()) != 0) break;
       const auto ti = Clock::now();
+      const auto T = pose_of(i);
+      if (!T) continue;
       const RgbdFrame f = ds.load(i);
-      const SensorFrame sf = f.sensor_frame(f.T_world_camera);  // camera -> world; the "robot" is the world origin
+      const SensorFrame sf = f.sensor_frame(*T);  // camera -> world; the "robot" is the world origin
       const auto before = mapper.stats();
       mapper.integrate(std::span<const SensorFrame>(&sf, 1), Eigen::Isometry3f::Identity());
       const auto& st = mapper.stats();
-      const Eigen::Vector3f cam = (T_map_world * f.T_world_camera).translation();
+      const Eigen::Vector3f cam = (T_map_world * *T).translation();
       track.push_back(cam.head<2>());
       ++mapped;
       if (!o.quiet) {
@@ -191,6 +209,7 @@ int run_map(const MapOptions& o) {
                  {"occupied_cells", occ},
                  {"free_cells", fr},
                  {"known_area_m2", static_cast<double>(occ + fr) * area}};
+    for (const auto& [k, v] : o.extra.items()) j[k] = v;
     j["seconds"] = std::chrono::duration<double>(Clock::now() - t0).count();
     if (stopped_by) {
       j["interrupted"] = std::string(StopSignals::name(stopped_by)) + " after " + std::to_string(mapped) + " of " +
@@ -213,8 +232,10 @@ int run_map(const MapOptions& o) {
 }  // namespace
 
 int run_map_folder(const std::string& input, const std::string& out, const std::string& profile, const std::string& layout, int threads,
-                   bool quiet) {
+                   bool quiet, const std::vector<std::optional<Eigen::Isometry3f>>* poses, const nlohmann::json& extra) {
   MapOptions o;
+  o.poses = poses;
+  o.extra = extra;
   o.input = input;
   o.out = out;
   o.profile = profile;

@@ -2,6 +2,8 @@
 #include <duet/runtime/io/cloud_io.hpp>
 #include <duet/runtime/io/grid_io.hpp>
 
+#include "cli_run.hpp"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -24,33 +26,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-  int code;
-  std::string output;  // stdout + stderr
-};
-
-CliRun run(const std::string& args) {
-  const std::string cmd = std::string(DUET_CLI) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return {-1, "popen failed"};
-  std::string out;
-  std::array<char, 4096> buf{};
-  while (std::fgets(buf.data(), buf.size(), p)) out += buf.data();
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
-
-fs::path data_dir() { return fs::path(DUET_DATA_DIR); }
-
-fs::path temp_dir(const std::string& name) {
-  const fs::path d = fs::path(DUET_BINARY_DIR) / "test-app" / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
-
-#define REQUIRE_DATA(sub)                                                                   \
-  if (!fs::exists(data_dir() / (sub))) GTEST_SKIP() << "shared data not found: " << (data_dir() / (sub))
+using duet::test::CliRun;
+using duet::test::data_dir;
+using duet::test::run;
+using duet::test::temp_dir;
 
 void expect_map_outputs(const fs::path& out, std::size_t min_points) {
   for (const char* f : {"cloud.pcd", "cloud.ply", "grid.yaml", "grid.pgm", "grid.png", "summary.json"})
@@ -493,31 +472,6 @@ TEST(DuetReplay, AnExploreRecordingReplaysToTheSameMaps) {
     EXPECT_TRUE(file_bytes(d / "run" / f) == file_bytes(d / "replay" / f)) << f << " differs";
   const auto s = nlohmann::json::parse(std::ifstream(d / "replay" / "summary.json"));
   EXPECT_EQ(s["sets_integrated"].get<int>(), 11);
-}
-
-TEST(DuetReplay, ATumFolderNeedsGroundTruthPosesUntilVisualOdometryExists) {
-  REQUIRE_DATA("rgbd/tum_fr2_pair");
-  const fs::path d = temp_dir("replay-tum");
-  const fs::path src = data_dir() / "rgbd" / "tum_fr2_pair";
-  for (const char* f : {"1.png", "2.png", "1_depth.png", "2_depth.png"}) fs::copy_file(src / f, d / f);
-  std::ofstream(d / "rgb.txt") << "# timestamp filename\n1.000 1.png\n1.033 2.png\n";
-  std::ofstream(d / "depth.txt") << "# timestamp filename\n1.001 1_depth.png\n1.034 2_depth.png\n";
-  std::ofstream(d / "groundtruth.txt") << "# timestamp tx ty tz qx qy qz qw\n0.999 0 0 0 0 0 0 1\n1.035 0.01 0 0 0 0 0 1\n";
-  std::ofstream(d / "camera-intrinsics.txt") << "520.9 0 325.1\n0 521.0 249.7\n0 0 1\n";
-  const CliRun no_poses = run("replay -q " + d.string() + " -o " + (d / "out").string());
-  EXPECT_NE(no_poses.code, 0) << no_poses.output;
-  EXPECT_NE(no_poses.output.find("--poses groundtruth"), std::string::npos) << no_poses.output;
-  const CliRun r = run("replay -q --poses groundtruth " + d.string() + " -o " + (d / "out").string());
-  ASSERT_EQ(r.code, 0) << r.output;
-  const duet::PointCloud cloud = duet::read_pcd(d / "out" / "cloud.pcd");
-  EXPECT_GT(cloud.size(), 1000u);
-  const auto s = nlohmann::json::parse(std::ifstream(d / "out" / "summary.json"));
-  EXPECT_EQ(s["frames"].get<int>(), 2);
-  // An unsorted list: an error naming the file and line.
-  std::ofstream(d / "rgb.txt") << "# timestamp filename\n1.033 2.png\n1.000 1.png\n";
-  const CliRun bad = run("replay -q --poses groundtruth " + d.string() + " -o " + (d / "out2").string());
-  EXPECT_NE(bad.code, 0);
-  EXPECT_NE(bad.output.find("rgb.txt:3"), std::string::npos) << bad.output;
 }
 
 TEST(DuetReplay, AFolderThatIsNeitherIsAnError) {

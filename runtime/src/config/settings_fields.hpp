@@ -150,6 +150,12 @@ void control_fields(V& v, ExplorerSettings& s) {
   v("cornered_after_s", s.cornered_after_s);
   v("slow_clearance_m", s.slow_clearance_m);
   v("slow_speed_mps", s.slow_speed_mps);
+  v("few_features_speed_mps", s.few_features_speed_mps);
+  v("seek_after_s", s.seek_after_s);
+  v("seek_cooldown_s", s.seek_cooldown_s);
+  v("seek_min_turn_rad", s.seek_min_turn_rad);
+  v("seek_min_range_m", s.seek_min_range_m);
+  v("seek_range_m", s.seek_range_m);
 }
 
 /// The `runtime` section.

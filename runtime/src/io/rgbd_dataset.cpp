@@ -306,7 +306,9 @@ RgbdDataset RgbdDataset::open(const fs::path& dir, const RgbdDatasetOptions& opt
   if (!is_dir(dir)) fail(ErrorCode::kIo, dir.string() + ": not a folder (expected an RGB-D dataset folder)");
 
   std::string layout = options.layout;
-  if (layout == "auto" && is_file(dir / "rgb.txt") && is_file(dir / "depth.txt") && is_file(dir / "groundtruth.txt")) layout = "tum";
+  if (layout == "auto" && is_file(dir / "rgb.txt") && is_file(dir / "depth.txt") &&
+      (is_file(dir / "groundtruth.txt") || !options.require_poses))
+    layout = "tum";
   if (layout == "auto") {
     const bool slambook = is_file(dir / "pose.txt") && is_dir(dir / "color") && is_dir(dir / "depth");
     bool match3d = is_file(dir / "camera-intrinsics.txt");
@@ -342,20 +344,27 @@ RgbdDataset RgbdDataset::open(const fs::path& dir, const RgbdDatasetOptions& opt
     // within 0.02 s (the TUM tools' associate.py default); depth frames without both are left out.
     const auto rgb = read_tum_list(dir / "rgb.txt", 2, "rgb.txt");
     const auto depth = read_tum_list(dir / "depth.txt", 2, "depth.txt");
-    const auto gt = read_tum_list(dir / "groundtruth.txt", 8, "groundtruth.txt");
+    ds.has_poses_ = options.require_poses || is_file(dir / "groundtruth.txt");
+    const auto gt = ds.has_poses_ ? read_tum_list(dir / "groundtruth.txt", 8, "groundtruth.txt")
+                                  : std::vector<std::pair<double, std::vector<std::string>>>{};
     for (const auto& [t, f] : depth) {
-      const std::size_t c = nearest(rgb, t, 0.02), g = nearest(gt, t, 0.02);
+      const std::size_t c = nearest(rgb, t, 0.02), g = ds.has_poses_ ? nearest(gt, t, 0.02) : 0;
       if (c == std::string::npos || g == std::string::npos) continue;
-      std::vector<std::string> pose(gt[g].second.begin(), gt[g].second.begin() + 7);
       char name[64];
       std::snprintf(name, sizeof name, "%.6f", t);
-      ds.frames_.push_back(Entry{name, dir / rgb[c].second[0], dir / f[0],
-                                 pose_from_tum_line(pose, (dir / "groundtruth.txt").string() + " (stamp " + name + ")", tol)});
+      Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
+      if (ds.has_poses_) {
+        std::vector<std::string> pose(gt[g].second.begin(), gt[g].second.begin() + 7);
+        T = pose_from_tum_line(pose, (dir / "groundtruth.txt").string() + " (stamp " + name + ")", tol);
+      }
+      ds.frames_.push_back(Entry{name, dir / rgb[c].second[0], dir / f[0], T});
+      ds.frames_.back().stamp_s = t;
       require_file(ds.frames_.back().depth, "missing frame file (listed in depth.txt)", input_limits::kImageBytes, "depth image");
       require_file(ds.frames_.back().color, "missing frame file (listed in rgb.txt)", input_limits::kImageBytes, "colour image");
     }
     if (ds.frames_.empty())
-      fail(ErrorCode::kParse, dir.string() + ": no depth frame has a colour frame and a ground-truth pose within 0.02 s");
+      fail(ErrorCode::kParse, dir.string() + (ds.has_poses_ ? ": no depth frame has a colour frame and a ground-truth pose within 0.02 s"
+                                                             : ": no depth frame has a colour frame within 0.02 s"));
     if (options.intrinsics) ds.intrinsics_ = *options.intrinsics;
     else if (is_file(dir / "camera-intrinsics.txt")) ds.intrinsics_ = intrinsics_from_file(dir / "camera-intrinsics.txt");
     else ds.intrinsics_ = PinholeIntrinsics{};  // TUM's "ROS default" (525, 525, 319.5, 239.5) of 640x480
@@ -470,6 +479,10 @@ const RgbdDataset::Entry& RgbdDataset::entry(std::size_t i) const {
 
 const std::string& RgbdDataset::frame_name(std::size_t i) const { return entry(i).name; }
 const Eigen::Isometry3f& RgbdDataset::pose(std::size_t i) const { return entry(i).T_world_camera; }
+double RgbdDataset::stamp(std::size_t i) const {
+  const Entry& e = entry(i);
+  return e.stamp_s >= 0.0 ? e.stamp_s : static_cast<double>(i) / 30.0;
+}
 
 RgbdFrame RgbdDataset::load(std::size_t i) const {
   const Entry& e = entry(i);

@@ -13,7 +13,8 @@ Controller::Controller(const Profile& profile, const ExplorerSettings& settings)
       settings_(settings),
       stall_(settings.stall_timeout_s, profile.chassis.radius_m + 0.5f * settings.contact_radius_m),
       slow_zone_(settings.slow_clearance_m, settings.slow_speed_mps),
-      cornered_(settings.cornered_after_s) {
+      cornered_(settings.cornered_after_s),
+      seek_(settings) {
   validate(settings_);
   validate(profile_.exploration.dwa);
 }
@@ -59,9 +60,17 @@ Twist Controller::follow(const Pose2& robot, const Twist& current, double now_s,
     return Twist{};
   }
   DwaSettings ds = plan.dwa;
+  // Few features in view: turn towards surfaces that may show some (the wheels carry the pose).
+  if (const std::optional<Twist> turn = seek_.step(robot, current, *plan.planning, ds, now_s)) {
+    stats_.feature_seeks = seek_.seeks();
+    dwa_state_.reset();
+    return *turn;
+  }
+  const float v_seen = seek_.speed_limit(ds.limits.max_v_mps);
+  if (v_seen < ds.limits.max_v_mps) ++stats_.few_feature_periods;
   const float v_limit = slow_zone_.speed_limit(robot, ds, *plan.planning);
   if (v_limit < ds.limits.max_v_mps) ++stats_.slowed;
-  ds.limits.max_v_mps = v_limit;
+  ds.limits.max_v_mps = std::min(v_limit, v_seen);
   const DwaState before = dwa_state_;
   DwaResult r = dwa_step(plan.local->clearance(), robot, current, plan.path, ds, dwa_state_, dwa_ws_);
   bool fell_back = false;

@@ -26,6 +26,8 @@ ExplorerStats merge_stats(ExplorerStats s, const ControllerStats& c) {
   s.escapes = c.escapes;
   s.cornered_escapes = c.cornered_escapes;
   s.slowed = c.slowed;
+  s.few_feature_periods = c.few_feature_periods;
+  s.feature_seeks = c.feature_seeks;
   return s;
 }
 

@@ -70,6 +70,17 @@ void validate(const ExplorerSettings& s) {
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::slow_clearance_m must be in [0, 10] m (0 = off), got " + std::to_string(s.slow_clearance_m));
   if (!(std::isfinite(s.slow_speed_mps) && s.slow_speed_mps > 0.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::slow_speed_mps must be in (0, inf) m/s, got " + std::to_string(s.slow_speed_mps));
+  const auto in = [](float v, float lo, float hi, const char* name, const char* unit) {
+    if (!(v >= lo && v <= hi))
+      fail(ErrorCode::kInvalidArgument, std::string("ExplorerSettings::") + name + " must be in [" + std::to_string(lo) + ", " +
+                                            std::to_string(hi) + "] " + unit + ", got " + std::to_string(v));
+  };
+  in(s.few_features_speed_mps, 0.0f, 100.0f, "few_features_speed_mps", "m/s (0 = no cap)");
+  in(s.seek_after_s, 0.0f, 3600.0f, "seek_after_s", "s (0 = never)");
+  in(s.seek_cooldown_s, 0.0f, 3600.0f, "seek_cooldown_s", "s");
+  in(s.seek_min_turn_rad, 0.0f, 3.1416f, "seek_min_turn_rad", "rad");
+  in(s.seek_range_m, 0.1f, 20.0f, "seek_range_m", "m");
+  in(s.seek_min_range_m, 0.0f, s.seek_range_m, "seek_min_range_m", "m (at most seek_range_m)");
   if (!(s.patrol_spacing_m >= 0.5f && s.patrol_spacing_m <= 100.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::patrol_spacing_m must be in [0.5, 100] m, got " + std::to_string(s.patrol_spacing_m));
   if (s.final_retries < 0 || s.final_retries > 1000)

@@ -513,6 +513,7 @@ void ExplorationRuntime::tick(double now_s) {
                              : "a sensor delivers again: moving on");
     blind_ = blind;
   }
+  explorer_.controller().set_localization_health(health_, now_s);
   last_cmd_ = worker_ ? explorer_.controller().control(pose_, odom_twist_, now_s, *link_) : explorer_.control(pose_, odom_twist_, now_s);
   if (stop_asked_) last_cmd_ = Twist{0.0f, 0.0f};  // kBackground: until the navigator has heard
   if (blind) {

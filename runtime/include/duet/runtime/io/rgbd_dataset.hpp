@@ -12,7 +12,8 @@
 ///    dataset: 640x480, fx 518, fy 519, cx 325.5, cy 253.5, 1000 units/m) unless overridden.
 ///  - "tum" (TUM RGB-D benchmark folders):
 ///      rgb.txt, depth.txt        "timestamp filename" (sorted, no duplicates)
-///      groundtruth.txt           "timestamp tx ty tz qx qy qz qw" (camera -> world)
+///      groundtruth.txt           "timestamp tx ty tz qx qy qz qw" (camera -> world); optional
+///                                with RgbdDatasetOptions::require_poses = false
 ///      camera-intrinsics.txt     3x3 K (optional; default: TUM's "ROS default" 525, 525, 319.5, 239.5)
 ///    Each depth frame takes the colour frame and the pose nearest in time within 0.02 s (as
 ///    the TUM tools' associate.py); depth frames without both are left out. Depth: 5000 units/m.
@@ -61,6 +62,9 @@ struct RgbdDatasetOptions {
   bool load_color = true;
   /// A quaternion norm / rotation matrix within this of unit is re-normalised, else an error.
   float rotation_tolerance = 1e-3f;
+  /// false: a TUM folder without groundtruth.txt is read too (every depth frame with a colour
+  /// frame within 0.02 s; poses identity, has_poses() false) - for visual odometry (duet replay).
+  bool require_poses = true;
 };
 
 /// One frame, owning its pixels (no OpenCV types).
@@ -102,12 +106,17 @@ class RgbdDataset {
   /// Frame i's name and pose without decoding its images.
   [[nodiscard]] const std::string& frame_name(std::size_t i) const;
   [[nodiscard]] const Eigen::Isometry3f& pose(std::size_t i) const;
+  /// False for a TUM folder read without groundtruth.txt (RgbdDatasetOptions::require_poses).
+  [[nodiscard]] bool has_poses() const noexcept { return has_poses_; }
+  /// Frame i's time stamp [s] (TUM: the depth image's; other layouts: the frame index / 30 Hz).
+  [[nodiscard]] double stamp(std::size_t i) const;
 
  private:
   struct Entry {
     std::string name;
     std::filesystem::path color, depth;
     Eigen::Isometry3f T_world_camera = Eigen::Isometry3f::Identity();
+    double stamp_s = -1.0;  ///< TUM: the depth image's stamp; else -1 (index / 30 Hz)
   };
   RgbdDataset() = default;
   const Entry& entry(std::size_t i) const;
@@ -117,6 +126,7 @@ class RgbdDataset {
   PinholeIntrinsics intrinsics_;
   float depth_units_per_m_ = 1000.0f;
   bool load_color_ = true;
+  bool has_poses_ = true;
   std::vector<Entry> frames_;
 };
 

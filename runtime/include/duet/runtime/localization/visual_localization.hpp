@@ -23,6 +23,7 @@
 /// gated visual update moves it. The scan-to-map correction and loop closure stay on top of it
 /// as the map <- odom correction (pose_corrector.hpp, loop_closure.hpp).
 /// Thread safety: one thread at a time.
+#include <duet/runtime/localization/localization_health.hpp>
 #include <duet/runtime/localization/visual_localization_settings.hpp>
 #include <duet/runtime/robot/robot_io.hpp>
 
@@ -33,9 +34,6 @@
 #include <span>
 
 namespace duet {
-
-enum class LocalizationHealth { kGood = 0, kDegraded = 1, kLost = 2 };
-[[nodiscard]] const char* to_string(LocalizationHealth h) noexcept;
 
 struct VisualLocalizationStats {
   std::size_t sets = 0;            ///< frame sets tracked

@@ -8,6 +8,8 @@
 ///    contact the sensors cannot see: GoalLink::stall() with a contact point just ahead;
 ///  - no goal: ask for a decision (GoalLink::decide), zero twist until there is a goal;
 ///  - time limit: the goal's deadline passed - GoalLink::abandon(kTimeout);
+///  - feature seeking: where vision sees too few features the top speed is capped, and the
+///    robot turns in place towards surfaces that can show some (feature_seek.hpp);
 ///  - slow zone: the top speed falls with the clearance on the planning grid;
 ///  - dynamic window on the local grid, falling back to the planning grid when hemmed in by
 ///    unseen cells;
@@ -22,6 +24,7 @@
 #include <duet/kernels/dwa.hpp>
 #include <duet/runtime/config/profile.hpp>
 #include <duet/runtime/navigation/escape.hpp>
+#include <duet/runtime/navigation/feature_seek.hpp>
 #include <duet/runtime/navigation/navigator.hpp>
 #include <duet/runtime/navigation/slow_zone.hpp>
 #include <duet/runtime/navigation/stall_detector.hpp>
@@ -52,6 +55,8 @@ struct ControllerStats {
   int escapes = 0;           ///< periods spent escaping the dynamic window's margin
   int cornered_escapes = 0;  ///< periods spent escaping a spot (cornered_after_s)
   int slowed = 0;            ///< periods the slow zone lowered the top speed
+  int few_feature_periods = 0;  ///< periods the top speed was capped for vision
+  int feature_seeks = 0;        ///< turns towards surfaces with features
 };
 
 class Controller {
@@ -61,6 +66,9 @@ class Controller {
   /// One control period: `robot` is the pose estimate (map frame), `current` the chassis'
   /// measured twist, now_s the runtime clock. Returns the command (zero when idle or done).
   Twist control(const Pose2& robot, const Twist& current, double now_s, GoalLink& link);
+
+  /// The visual localisation's health (nothing: vision is off), before control() each period.
+  void set_localization_health(std::optional<LocalizationHealth> h, double now_s) noexcept { seek_.set_health(h, now_s); }
 
   /// The map frame moved by D (loop closure).
   void shift(const Pose2& D);
@@ -76,6 +84,7 @@ class Controller {
   StallDetector stall_;
   SlowZone slow_zone_;
   CorneredWatch cornered_;
+  FeatureSeek seek_;
   Twist last_cmd_;
   double stuck_since_s_ = -1.0;
   std::uint64_t goal_id_ = 0;  ///< the goal the state below belongs to

@@ -87,6 +87,18 @@ struct ExplorerSettings {
   /// [m], [0, 10]; 0 = off.
   float slow_clearance_m = 0.8f;
   float slow_speed_mps = 0.25f;       ///< the top speed at the margin [m/s], (0, inf)
+  /// Feature seeking (feature_seek.hpp; only with localization.visual_odometry on): where vision
+  /// sees too few features (health degraded or lost) the top speed is capped at
+  /// few_features_speed_mps [m/s], [0, inf) (0 = no cap) ...
+  float few_features_speed_mps = 0.15f;
+  /// ... and after seek_after_s [s], [0, inf) (0 = never) of it the robot turns in place towards
+  /// surfaces the planning grid shows between seek_min_range_m and seek_range_m [m] (at least
+  /// seek_min_turn_rad [rad], [0, pi] away from its heading), at most once per seek_cooldown_s [s].
+  float seek_after_s = 1.0f;
+  float seek_cooldown_s = 15.0f;
+  float seek_min_turn_rad = 0.5f;
+  float seek_min_range_m = 0.6f;
+  float seek_range_m = 3.5f;
 };
 void validate(const ExplorerSettings& s);
 
@@ -114,6 +126,8 @@ struct ExplorerStats {
   int escapes = 0;                  ///< control periods spent escaping the dynamic window's margin
   int cornered_escapes = 0;         ///< control periods spent escaping a spot (cornered_after_s)
   int slowed = 0;                   ///< control periods the slow zone lowered the top speed
+  int few_feature_periods = 0;      ///< control periods the top speed was capped for vision (feature_seek.hpp)
+  int feature_seeks = 0;            ///< turns towards surfaces with features (feature_seek.hpp)
   int goals_moved = 0;              ///< goals moved off cells next to unknown space (decisions and re-checks)
   int relaxed_goals = 0;            ///< frontier goals found on a relaxed grid
   int boxed_in_goals = 0;           ///< of relaxed_goals, those with uncertain cells not blocking

@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
-#include "scripted_robot.hpp"
+#include "runtime/scripted_robot.hpp"
 
 #include <atomic>
 #include <chrono>
