@@ -82,6 +82,7 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
     j["pose"]["visual_odometry"] = {{"health_end", s.localization_health},
                                     {"sets", s.visual.sets},
                                     {"accepted", s.visual.accepted},
+                                    {"tracked_not_fused", s.visual.tracked_not_fused},
                                     {"gated", s.visual.gated},
                                     {"failed", s.visual.failed},
                                     {"failed_features", s.visual.too_few_features},
@@ -90,7 +91,12 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                                     {"incomplete_sets", s.visual_sets_incomplete},
                                     {"location_points", s.visual.location_points},
                                     {"resets", s.visual.resets},
-                                    {"time_s", s.visual.time_s}};
+                                    {"time_s", s.visual.time_s},
+                                    {"wheel_scale", s.visual.wheel_scale},
+                                    {"wheel_scale_min", s.visual.wheel_scale_min},
+                                    {"wheel_scale_max", s.visual.wheel_scale_max},
+                                    {"wheel_yaw_bias_radps", s.visual.wheel_bias},
+                                    {"mean_nis", s.visual.mean_nis}};
   j["faults"] = faults_json(s.faults);
   j["input"] = input_json(s.input, s.sets_with_missing, s.blind_holds, s.relocalizations);
   j["occupied_cells_on_obstacles"] = s.occupied_on_obstacles >= 0.0 ? nlohmann::json(s.occupied_on_obstacles) : nlohmann::json(nullptr);

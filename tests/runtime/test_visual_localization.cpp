@@ -34,7 +34,10 @@ TEST(VisualLocalization, TracksTheLabInTheLoop) {
   const auto s = run.summary();
   ASSERT_TRUE(s.visual_odometry);
   EXPECT_GE(s.visual.sets, 190u);  // 5 Hz for 40 s
-  EXPECT_GE(s.visual.accepted, s.visual.sets * 9 / 10) << "failed " << s.visual.failed << " gated " << s.visual.gated;
+  // Tracked: fused at a location point, or between them (fuse_every_set false).
+  EXPECT_GE(s.visual.accepted + s.visual.tracked_not_fused, s.visual.sets * 9 / 10)
+      << "failed " << s.visual.failed << " gated " << s.visual.gated;
+  EXPECT_GE(s.visual.accepted + 2, s.visual.location_points - 1) << "a location point not fused";
   EXPECT_EQ(s.localization_health, "good");
   EXPECT_LT(s.pose_error_max_m, 0.1);
   EXPECT_EQ(s.collisions, 0u);

@@ -189,7 +189,9 @@ template <class V>
 void fields(V& v, VisualLocalizationSettings& s) {
   v("enabled", s.enabled);
   v("rate_hz", s.rate_hz);
+  v("fuse_every_set", s.fuse_every_set);
   v("good_min_inliers", s.good_min_inliers);
+  v("fuse_min_inliers", s.fuse_min_inliers);
   v("degraded_after_s", s.degraded_after_s);
   v("lost_after_s", s.lost_after_s);
   v("keyframe_translation_m", s.odometer.keyframe_translation_m);

@@ -2,6 +2,7 @@
 #include <duet/runtime/localization/visual_localization.hpp>
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -46,6 +47,8 @@ void validate(const VisualLocalizationSettings& s) {
   validate(s.odometer);
   validate(s.ekf);
   const std::string w = "visual localization settings: ";
+  if (s.fuse_min_inliers < 0 || s.fuse_min_inliers > 100000)
+    fail(ErrorCode::kInvalidArgument, w + "fuse_min_inliers must be in [0, 100000], got " + std::to_string(s.fuse_min_inliers));
   if (s.good_min_inliers < 0 || s.good_min_inliers > 100000)
     fail(ErrorCode::kInvalidArgument, w + "good_min_inliers must be in [0, 100000], got " + std::to_string(s.good_min_inliers));
   if (!(s.degraded_after_s > 0.0 && s.degraded_after_s <= 3600.0))
@@ -137,8 +140,18 @@ void VisualLocalization::frames(std::span<const SensorFrame> frames, double t) {
     const Eigen::Vector3d z(M.translation().x(), M.translation().y(), std::atan2(M.linear()(1, 0), M.linear()(0, 0)));
     // Carried to the clone's and the EKF's times: z' = lag_clone^-1 * z * lag_now.
     const Eigen::Vector3d d = compose(compose(inverse(vec(clone_lag_)), z), vec(lag));
-    if (ekf_.update_visual(d, planar_covariance(M, step.result.covariance))) {
+    const bool strong = static_cast<int>(step.result.inliers) >= settings_.fuse_min_inliers;
+    if ((!settings_.fuse_every_set && !step.new_keyframe) || !strong) {
+      // Tracked, not fused (fuse_every_set; or too few inliers to trust: the wheels carry on).
+      ++stats_.tracked_not_fused;
+      if (static_cast<int>(step.result.inliers) >= settings_.good_min_inliers) last_ok_s_ = t;
+    } else if (ekf_.update_visual(d, planar_covariance(M, step.result.covariance))) {
       ++stats_.accepted;
+      stats_.wheel_scale = ekf_.wheel_scale();
+      stats_.wheel_scale_min = std::min(stats_.wheel_scale_min, stats_.wheel_scale);
+      stats_.wheel_scale_max = std::max(stats_.wheel_scale_max, stats_.wheel_scale);
+      stats_.wheel_bias = ekf_.wheel_bias();
+      stats_.mean_nis += (ekf_.last_visual_chi2() - stats_.mean_nis) / static_cast<double>(stats_.accepted);
       if (static_cast<int>(step.result.inliers) >= settings_.good_min_inliers) last_ok_s_ = t;
     } else {
       ++stats_.gated;

@@ -38,6 +38,7 @@ namespace duet {
 struct VisualLocalizationStats {
   std::size_t sets = 0;            ///< frame sets tracked
   std::size_t accepted = 0;        ///< visual updates the EKF took
+  std::size_t tracked_not_fused = 0;  ///< sets tracked between location points (fuse_every_set false)
   std::size_t gated = 0;           ///< ... it rejected (Mahalanobis gate)
   std::size_t failed = 0;          ///< sets the odometry could not track, of which:
   std::size_t too_few_features = 0;  ///< blank, dark or featureless views (or no depth under the features)
@@ -47,6 +48,13 @@ struct VisualLocalizationStats {
   std::size_t resets = 0;          ///< location points forced after failures (the chain started over)
   std::size_t last_inliers = 0;
   double time_s = 0.0;             ///< wall time in frames() [s]
+  /// The wheels' errors as the EKF has learnt them (pose_ekf.hpp): speed scale (now, lowest,
+  /// highest) and yaw-rate bias now [rad/s].
+  double wheel_scale = 1.0, wheel_scale_min = 1.0, wheel_scale_max = 1.0;
+  double wheel_bias = 0.0;
+  /// Mean squared Mahalanobis distance (NIS) of the accepted visual updates: 3 when the visual
+  /// covariance is right (3 dof), larger when vision is trusted more than it deserves.
+  double mean_nis = 0.0;
 };
 
 class VisualLocalization {
