@@ -25,8 +25,7 @@ data="$here/../shared/data"
 
 DUET_EXTRA_PKGS="clang-14 libclang-rt-14-dev" CC=clang-14 CXX=clang++-14 DUET_BUILD_TYPE=RelWithDebInfo \
   DUET_BUILD_TARGETS="$(printf 'fuzz_%s ' "${targets[@]}")" \
-  "$here/scripts/setup.sh" "$build" -DDUET_FUZZ=ON -DDUET_BUILD_TESTS=OFF -DDUET_BUILD_BENCH=OFF \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG"
+  "$here/scripts/setup.sh" "$build" -DDUET_FUZZ=ON -DDUET_BUILD_TESTS=OFF -DDUET_BUILD_BENCH=OFF
 
 # Extra seeds from the project and the shared data (read in place, never copied into the repo).
 seeds_for() {

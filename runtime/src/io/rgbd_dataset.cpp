@@ -344,16 +344,16 @@ RgbdDataset RgbdDataset::open(const fs::path& dir, const RgbdDatasetOptions& opt
     // within 0.02 s (the TUM tools' associate.py default); depth frames without both are left out.
     const auto rgb = read_tum_list(dir / "rgb.txt", 2, "rgb.txt");
     const auto depth = read_tum_list(dir / "depth.txt", 2, "depth.txt");
-    ds.has_poses_ = options.require_poses || is_file(dir / "groundtruth.txt");
-    const auto gt = ds.has_poses_ ? read_tum_list(dir / "groundtruth.txt", 8, "groundtruth.txt")
+    const bool has_poses = options.require_poses || is_file(dir / "groundtruth.txt");
+    const auto gt = has_poses ? read_tum_list(dir / "groundtruth.txt", 8, "groundtruth.txt")
                                   : std::vector<std::pair<double, std::vector<std::string>>>{};
     for (const auto& [t, f] : depth) {
-      const std::size_t c = nearest(rgb, t, 0.02), g = ds.has_poses_ ? nearest(gt, t, 0.02) : 0;
+      const std::size_t c = nearest(rgb, t, 0.02), g = has_poses ? nearest(gt, t, 0.02) : 0;
       if (c == std::string::npos || g == std::string::npos) continue;
       char name[64];
       std::snprintf(name, sizeof name, "%.6f", t);
       Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
-      if (ds.has_poses_) {
+      if (has_poses) {
         std::vector<std::string> pose(gt[g].second.begin(), gt[g].second.begin() + 7);
         T = pose_from_tum_line(pose, (dir / "groundtruth.txt").string() + " (stamp " + name + ")", tol);
       }
@@ -363,7 +363,7 @@ RgbdDataset RgbdDataset::open(const fs::path& dir, const RgbdDatasetOptions& opt
       require_file(ds.frames_.back().color, "missing frame file (listed in rgb.txt)", input_limits::kImageBytes, "colour image");
     }
     if (ds.frames_.empty())
-      fail(ErrorCode::kParse, dir.string() + (ds.has_poses_ ? ": no depth frame has a colour frame and a ground-truth pose within 0.02 s"
+      fail(ErrorCode::kParse, dir.string() + (has_poses ? ": no depth frame has a colour frame and a ground-truth pose within 0.02 s"
                                                              : ": no depth frame has a colour frame within 0.02 s"));
     if (options.intrinsics) ds.intrinsics_ = *options.intrinsics;
     else if (is_file(dir / "camera-intrinsics.txt")) ds.intrinsics_ = intrinsics_from_file(dir / "camera-intrinsics.txt");

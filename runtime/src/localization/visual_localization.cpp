@@ -140,11 +140,13 @@ void VisualLocalization::frames(std::span<const SensorFrame> frames, double t) {
     const Eigen::Vector3d z(M.translation().x(), M.translation().y(), std::atan2(M.linear()(1, 0), M.linear()(0, 0)));
     // Carried to the clone's and the EKF's times: z' = lag_clone^-1 * z * lag_now.
     const Eigen::Vector3d d = compose(compose(inverse(vec(clone_lag_)), z), vec(lag));
-    const bool strong = static_cast<int>(step.result.inliers) >= settings_.fuse_min_inliers;
-    if ((!settings_.fuse_every_set && !step.new_keyframe) || !strong) {
-      // Tracked, not fused (fuse_every_set; or too few inliers to trust: the wheels carry on).
+    const int inliers = static_cast<int>(step.result.inliers);
+    // Not fused: between location points (fuse_every_set false), or too few inliers to trust
+    // (fuse_min_inliers) - the wheels carry on, and the set still counts for the health.
+    const bool fuse = (settings_.fuse_every_set || step.new_keyframe) && inliers >= settings_.fuse_min_inliers;
+    bool kept = true;
+    if (!fuse) {
       ++stats_.tracked_not_fused;
-      if (static_cast<int>(step.result.inliers) >= settings_.good_min_inliers) last_ok_s_ = t;
     } else if (ekf_.update_visual(d, planar_covariance(M, step.result.covariance))) {
       ++stats_.accepted;
       stats_.wheel_scale = ekf_.wheel_scale();
@@ -152,10 +154,11 @@ void VisualLocalization::frames(std::span<const SensorFrame> frames, double t) {
       stats_.wheel_scale_max = std::max(stats_.wheel_scale_max, stats_.wheel_scale);
       stats_.wheel_bias = ekf_.wheel_bias();
       stats_.mean_nis += (ekf_.last_visual_chi2() - stats_.mean_nis) / static_cast<double>(stats_.accepted);
-      if (static_cast<int>(step.result.inliers) >= settings_.good_min_inliers) last_ok_s_ = t;
     } else {
       ++stats_.gated;
+      kept = false;
     }
+    if (kept && inliers >= settings_.good_min_inliers) last_ok_s_ = t;
   }
   if (step.new_keyframe) {
     ekf_.clone();

@@ -63,7 +63,7 @@ struct RgbdDatasetOptions {
   /// A quaternion norm / rotation matrix within this of unit is re-normalised, else an error.
   float rotation_tolerance = 1e-3f;
   /// false: a TUM folder without groundtruth.txt is read too (every depth frame with a colour
-  /// frame within 0.02 s; poses identity, has_poses() false) - for visual odometry (duet replay).
+  /// frame within 0.02 s; poses identity) - for visual odometry (duet replay).
   bool require_poses = true;
 };
 
@@ -106,8 +106,6 @@ class RgbdDataset {
   /// Frame i's name and pose without decoding its images.
   [[nodiscard]] const std::string& frame_name(std::size_t i) const;
   [[nodiscard]] const Eigen::Isometry3f& pose(std::size_t i) const;
-  /// False for a TUM folder read without groundtruth.txt (RgbdDatasetOptions::require_poses).
-  [[nodiscard]] bool has_poses() const noexcept { return has_poses_; }
   /// Frame i's time stamp [s] (TUM: the depth image's; other layouts: the frame index / 30 Hz).
   [[nodiscard]] double stamp(std::size_t i) const;
 
@@ -126,7 +124,6 @@ class RgbdDataset {
   PinholeIntrinsics intrinsics_;
   float depth_units_per_m_ = 1000.0f;
   bool load_color_ = true;
-  bool has_poses_ = true;
   std::vector<Entry> frames_;
 };
 

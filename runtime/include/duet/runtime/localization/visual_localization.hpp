@@ -38,7 +38,7 @@ namespace duet {
 struct VisualLocalizationStats {
   std::size_t sets = 0;            ///< frame sets tracked
   std::size_t accepted = 0;        ///< visual updates the EKF took
-  std::size_t tracked_not_fused = 0;  ///< sets tracked between location points (fuse_every_set false)
+  std::size_t tracked_not_fused = 0;  ///< sets tracked but not fused (fuse_every_set, fuse_min_inliers)
   std::size_t gated = 0;           ///< ... it rejected (Mahalanobis gate)
   std::size_t failed = 0;          ///< sets the odometry could not track, of which:
   std::size_t too_few_features = 0;  ///< blank, dark or featureless views (or no depth under the features)

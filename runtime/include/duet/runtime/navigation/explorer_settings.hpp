@@ -89,11 +89,12 @@ struct ExplorerSettings {
   float slow_speed_mps = 0.25f;       ///< the top speed at the margin [m/s], (0, inf)
   /// Feature seeking (feature_seek.hpp; only with localization.visual_odometry on): where vision
   /// sees too few features (health degraded or lost) the top speed is capped at
-  /// few_features_speed_mps [m/s], [0, inf) (0 = no cap) ...
+  /// few_features_speed_mps [m/s], [0, 100] (0 = no cap) ...
   float few_features_speed_mps = 0.15f;
-  /// ... and after seek_after_s [s], [0, inf) (0 = never) of it the robot turns in place towards
-  /// surfaces the planning grid shows between seek_min_range_m and seek_range_m [m] (at least
-  /// seek_min_turn_rad [rad], [0, pi] away from its heading), at most once per seek_cooldown_s [s].
+  /// ... and after seek_after_s [s], [0, 3600] (0 = never) of it the robot turns in place towards
+  /// surfaces the planning grid shows between seek_min_range_m [m], [0, seek_range_m] and
+  /// seek_range_m [m], [0.1, 20] (at least seek_min_turn_rad [rad], [0, pi] away from its
+  /// heading), at most once per seek_cooldown_s [s], [0, 3600].
   float seek_after_s = 1.0f;
   float seek_cooldown_s = 15.0f;
   float seek_min_turn_rad = 0.5f;
