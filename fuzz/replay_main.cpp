@@ -13,7 +13,7 @@
 #include <iterator>
 #include <vector>
 
-#define DUET_FUZZ_TARGETS(X) X(pcd) X(ply) X(map_server) X(world) X(profile) X(rgbd) X(recording) X(capi)
+#define DUET_FUZZ_TARGETS(X) X(pcd) X(ply) X(map_server) X(world) X(profile) X(rgbd) X(recording) X(capi) X(tum)
 #define DUET_DECLARE(name) extern "C" int duet_fuzz_##name(const std::uint8_t* data, std::size_t size);
 DUET_FUZZ_TARGETS(DUET_DECLARE)
 

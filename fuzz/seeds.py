@@ -6,6 +6,7 @@ the project's profiles and worlds as further seeds. Regression inputs (crash-*, 
 by fuzzing sit beside the seeds and are never rewritten by this script.
 
 Usage: python3 fuzz/seeds.py"""
+import math
 import os
 import random
 import struct
@@ -185,6 +186,18 @@ def capi_seeds():
         put("capi", "runtime%d" % k, run)
 
 
+def tum_seeds():
+    """TUM trajectories: a short valid one, comments and blank lines, equal stamps, a
+    quaternion to re-normalise, and broken lines (the reader names them)."""
+    rows = ["%.4f %.3f %.3f %.3f 0 0 %.6f %.6f" % (0.1 * i, 0.1 * i, -0.05 * i, 0.0, math.sin(0.05 * i), math.cos(0.05 * i))
+            for i in range(8)]
+    put("tum", "valid.txt", ("# timestamp tx ty tz qx qy qz qw\n" + "\n".join(rows) + "\n").encode())
+    put("tum", "comments.txt", ("\n# a comment\n\n" + rows[0] + "\n  \n" + rows[1] + "\n").encode())
+    put("tum", "same_stamp.txt", (rows[2] + "\n" + rows[2].replace("0.200 ", "0.900 ", 1) + "\n" + rows[3] + "\n").encode())
+    put("tum", "unnormalised.txt", b"1.0 0 0 0 0 0 0 1.005\n2.0 1 0 0 0 0 0.001 0.999\n3.0 2 0 0 0 0 0 1\n")
+    put("tum", "broken.txt", b"1.0 0 0 0 0 0 0\n2.0 nan 0 0 0 0 0 1\n3.0 1e400 0 0 0 0 0 1\n")
+
+
 if __name__ == "__main__":
     pcd_seeds()
     ply_seeds()
@@ -194,3 +207,4 @@ if __name__ == "__main__":
     recording_seeds()
     profile_seeds()
     capi_seeds()
+    tum_seeds()

@@ -17,7 +17,7 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 seconds="${1:-60}"
 shift || true
-all=(pcd ply map_server world profile rgbd recording capi)
+all=(pcd ply map_server world profile rgbd recording capi tum)
 targets=("$@")
 ((${#targets[@]})) || targets=("${all[@]}")
 build="${FUZZ_BUILD:-$here/build-fuzz}"
@@ -33,6 +33,7 @@ seeds_for() {
     pcd) ls "$data"/pcl/*.pcd 2>/dev/null | while read -r f; do [ "$(stat -c %s "$f")" -le 300000 ] && echo "$f"; done ;;
     profile) ls "$here"/profiles/*.yaml ;;
     world) echo "$here/profiles/worlds/lab.yaml" ;;
+    tum) ls "$data"/trajectories/*.txt 2>/dev/null ;;
     *) ;;
   esac
 }

@@ -9,19 +9,24 @@
 #      synchronisation (its parallel loops would show as races).
 #   4. Fuzzing                  (build-fuzz/),  every libFuzzer target (clang, ASan + UBSan +
 #      LeakSanitizer) for DUET_FUZZ_SECONDS (default 20) seconds each: scripts/fuzz.sh.
+# Each test executable runs as DUET_TEST_SHARDS (default 4) ctest tests (gtest sharding): a test
+# executable's process start costs ~0.4 s of CPU in Release and ~0.9 s under ASan, which over
+# 600 tests was ~13 minutes of a 2-core run (tests/CMakeLists.txt). A failing shard prints its
+# whole output; rerun one test with e.g. build/tests/test_runtime --gtest_filter='SimExplore.*'.
 # Usage: scripts/test.sh            all passes
 #        DUET_SKIP_SANITIZERS=1 scripts/test.sh   only the Release pass
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 jobs="$(nproc 2>/dev/null || echo 2)"
+shards="-DDUET_TEST_SHARDS=${DUET_TEST_SHARDS:-4}"
 
 echo "== duet: Release build and tests"
-"$here/scripts/setup.sh" "$here/build"
+"$here/scripts/setup.sh" "$here/build" "$shards"
 (cd "$here/build" && ctest --output-on-failure -j "$jobs" --timeout 900)
 
 if [ "${DUET_SKIP_SANITIZERS:-0}" != 1 ]; then
   echo "== duet: AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
-  DUET_BUILD_TYPE=RelWithDebInfo "$here/scripts/setup.sh" "$here/build-asan" -DDUET_SANITIZE=ON -DDUET_BUILD_BENCH=OFF
+  DUET_BUILD_TYPE=RelWithDebInfo "$here/scripts/setup.sh" "$here/build-asan" "$shards" -DDUET_SANITIZE=ON -DDUET_BUILD_BENCH=OFF
   export ASAN_OPTIONS="detect_leaks=0:abort_on_error=1:strict_string_checks=1"
   export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
   (cd "$here/build-asan" && ctest --output-on-failure -j "$jobs" --timeout 1800)
@@ -29,7 +34,7 @@ if [ "${DUET_SKIP_SANITIZERS:-0}" != 1 ]; then
   echo "== duet: ThreadSanitizer build and the threaded tests"
   export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$here/tests/tsan.supp"
   DUET_BUILD_TYPE=RelWithDebInfo DUET_BUILD_TARGETS="test_threads test_capi_threads" \
-    "$here/scripts/setup.sh" "$here/build-tsan" -DDUET_SANITIZE_THREAD=ON -DDUET_BUILD_BENCH=OFF
+    "$here/scripts/setup.sh" "$here/build-tsan" "$shards" -DDUET_SANITIZE_THREAD=ON -DDUET_BUILD_BENCH=OFF
   (cd "$here/build-tsan" && ctest --output-on-failure -j "$jobs" --timeout 1800 -L '^test_(threads|capi_threads)$')
 
   echo "== duet: fuzzing, ${DUET_FUZZ_SECONDS:-20} s per target"

@@ -77,6 +77,7 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                {"heading_error_end_deg", s.heading_error_deg},
                {"scan_matches", s.scan_matches},
                {"scan_match_rejected", s.scan_match_rejected},
+               {"relocalizations_held", s.relocalizations_held},
                {"scan_match_time_s", s.scan_match_time_s}};
   if (s.visual_odometry)
     j["pose"]["visual_odometry"] = {{"health_end", s.localization_health},

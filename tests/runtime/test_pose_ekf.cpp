@@ -5,6 +5,7 @@
 #include <duet/kernels/error.hpp>
 #include <duet/runtime/localization/pose_ekf.hpp>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
@@ -82,6 +83,46 @@ TEST(PoseEkf, VisualUpdateEqualsAReferenceKalmanUpdate) {
   EXPECT_LT((ekf.state() - want).norm(), 1e-7) << (ekf.state() - want).transpose();
   EXPECT_LT((ekf.covariance() - want_P).norm(), 1e-7);
   EXPECT_EQ(ekf.visual_accepted(), 1u);
+}
+
+// learn_wheels = false (a Schmidt consider update): the pose moves as the reference gain says,
+// k and b keep their values, and the covariance is the Joseph form's for that gain - still
+// symmetric positive definite and no smaller than the full update's.
+TEST(PoseEkf, AConsiderUpdateCorrectsThePoseButNotTheWheels) {
+  PoseEkf ekf, full;
+  for (PoseEkf* e : {&ekf, &full}) {
+    e->reset({0.5f, 0.2f, -0.3f});
+    for (int k = 0; k < 50; ++k) e->predict(kDt, 0.4, 0.1);
+    e->clone();
+    for (int k = 0; k < 50; ++k) e->predict(kDt, 0.4, -0.2);
+  }
+  const PoseEkf::State x = ekf.state();
+  const PoseEkf::Covariance P = ekf.covariance();
+  const double cc = std::cos(x(7)), sc = std::sin(x(7)), dx = x(0) - x(5), dy = x(1) - x(6);
+  const Eigen::Vector3d h(cc * dx + sc * dy, -sc * dx + cc * dy, std::remainder(x(2) - x(7), 2.0 * std::numbers::pi));
+  Eigen::Matrix<double, 3, PoseEkf::kN> H = Eigen::Matrix<double, 3, PoseEkf::kN>::Zero();
+  H(0, 0) = cc, H(0, 1) = sc, H(0, 5) = -cc, H(0, 6) = -sc, H(0, 7) = h(1);
+  H(1, 0) = -sc, H(1, 1) = cc, H(1, 5) = sc, H(1, 6) = -cc, H(1, 7) = -h(0);
+  H(2, 2) = 1.0, H(2, 7) = -1.0;
+  const Eigen::Matrix3d R = Eigen::Vector3d(1e-4, 1e-4, 3e-5).asDiagonal();
+  Eigen::Matrix<double, PoseEkf::kN, 3> K = P * H.transpose() * (H * P * H.transpose() + R).inverse();
+  K.middleRows<2>(3).setZero();
+  const Eigen::Vector3d z = h + Eigen::Vector3d(-0.03, 0.01, 0.01);  // the wheels ran 3 cm long
+  const PoseEkf::Covariance IKH = PoseEkf::Covariance::Identity() - K * H;
+  const PoseEkf::State want = x + K * (z - h);
+  const PoseEkf::Covariance want_P = IKH * P * IKH.transpose() + K * R * K.transpose();
+  ASSERT_TRUE(ekf.update_visual(z, R, false));
+  ASSERT_TRUE(full.update_visual(z, R, true));
+  EXPECT_LT((ekf.state() - want).norm(), 1e-9) << (ekf.state() - want).transpose();
+  EXPECT_LT((ekf.covariance() - want_P).norm(), 1e-9);
+  EXPECT_EQ(ekf.wheel_scale(), 1.0);
+  EXPECT_EQ(ekf.wheel_bias(), 0.0);
+  EXPECT_LT(full.wheel_scale(), 1.0);  // the full update learns the long wheels
+  EXPECT_NEAR(ekf.pose().x, full.pose().x, 0.01);  // the pose is corrected either way
+  EXPECT_NE(ekf.pose().x, static_cast<float>(x(0)));
+  const Eigen::SelfAdjointEigenSolver<PoseEkf::Covariance> eig(ekf.covariance());
+  EXPECT_GT(eig.eigenvalues().minCoeff(), 0.0);
+  EXPECT_LE(full.covariance().trace(), ekf.covariance().trace());
 }
 
 TEST(PoseEkf, VisionCorrectsABiasedWheelAndTheGateRejectsAJump) {

@@ -103,6 +103,17 @@ TEST(VisualLocalization, BadSettingsAreNamed) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("lost_after_s"), std::string::npos) << e.what();
   }
+  for (const char* field : {"fuse_min_inliers", "learn_wheels_min_inliers", "good_min_inliers"}) {
+    s = {};
+    const std::string f = field;
+    (f == "fuse_min_inliers" ? s.fuse_min_inliers : f == "good_min_inliers" ? s.good_min_inliers : s.learn_wheels_min_inliers) = -1;
+    try {
+      VisualLocalization v(s);
+      ADD_FAILURE() << "no error for " << f;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(f), std::string::npos) << e.what();
+    }
+  }
   // Through the profile: a key of localization.visual_odometry, named with its path.
   try {
     const Profile base = builtin_profile("dual_kinect_kobuki");

@@ -333,6 +333,7 @@ ExploreSummary SimExplore::summary() const {
   s.sets_with_missing = rs.sets_with_missing;
   s.blind_holds = rs.blind_holds;
   s.relocalizations = rs.relocalizations;
+  s.relocalizations_held = rs.relocalizations_held;
   s.occupied_on_obstacles = occupied_on_obstacles();
   return s;
 }

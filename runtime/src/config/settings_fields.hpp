@@ -192,6 +192,7 @@ void fields(V& v, VisualLocalizationSettings& s) {
   v("fuse_every_set", s.fuse_every_set);
   v("good_min_inliers", s.good_min_inliers);
   v("fuse_min_inliers", s.fuse_min_inliers);
+  v("learn_wheels_min_inliers", s.learn_wheels_min_inliers);
   v("degraded_after_s", s.degraded_after_s);
   v("lost_after_s", s.lost_after_s);
   v("keyframe_translation_m", s.odometer.keyframe_translation_m);

@@ -47,6 +47,7 @@ void write_runtime_outputs(ExplorationRuntime& rt, const Trajectory& trajectory,
   j["scan_match_rejected"] = st.scan_match_rejected;
   j["loop_closures"] = st.loop_closures;
   j["relocalizations"] = st.relocalizations;
+  j["relocalizations_held"] = st.relocalizations_held;
   j["frames_received"] = st.frames_received;
   j["frame_drops"] = st.frame_drops;
   j["odometry_received"] = st.odometry_received;

@@ -141,7 +141,11 @@ Pose2 PoseCorrector::update(const CameraPoints& points, std::span<const SensorFr
     const int recent = std::popcount(suspect_ & 0x1Fu);  // of the last 5
     // Only against the current grid: an aged reference lacks what the robot has just seen, and
     // a wide window then finds false fits of the scan's few known parts.
-    if (pc.relocalize_after > 0 && pc.reference_age_s <= 0.0 && (recent >= pc.relocalize_after || lost)) {
+    const bool wide_due = pc.relocalize_after > 0 && pc.reference_age_s <= 0.0 && (recent >= pc.relocalize_after || lost);
+    if (wide_due && odometry_confirmed_) {
+      suspect_ = 0;
+      ++relocalizations_held_;
+    } else if (wide_due) {
       suspect_ = 0;
       ScanMatchSettings wide = pc.match;
       wide.linear_window_m = pc.relocalize_window_m;

@@ -67,7 +67,7 @@ void PoseEkf::predict(double dt, double v_in, double w_in, bool gyro) {
   P_(4, 4) += static_cast<double>(settings_.wheel_bias_walk) * settings_.wheel_bias_walk * dt;
 }
 
-bool PoseEkf::update_visual(const Eigen::Vector3d& d, const Eigen::Matrix3d& covariance) {
+bool PoseEkf::update_visual(const Eigen::Vector3d& d, const Eigen::Matrix3d& covariance, bool learn_wheels) {
   if (!d.allFinite() || !covariance.allFinite()) {
     ++rejected_;
     return false;
@@ -91,7 +91,8 @@ bool PoseEkf::update_visual(const Eigen::Vector3d& d, const Eigen::Matrix3d& cov
     ++rejected_;
     return false;
   }
-  const Eigen::Matrix<double, kN, 3> K = P_ * H.transpose() * llt.solve(Eigen::Matrix3d::Identity());
+  Eigen::Matrix<double, kN, 3> K = P_ * H.transpose() * llt.solve(Eigen::Matrix3d::Identity());
+  if (!learn_wheels) K.middleRows<2>(3).setZero();  // Schmidt: k and b considered, not estimated
   x_ += K * y;
   x_(2) = wrap(x_(2));
   x_(7) = wrap(x_(7));

@@ -49,6 +49,8 @@ void validate(const VisualLocalizationSettings& s) {
   const std::string w = "visual localization settings: ";
   if (s.fuse_min_inliers < 0 || s.fuse_min_inliers > 100000)
     fail(ErrorCode::kInvalidArgument, w + "fuse_min_inliers must be in [0, 100000], got " + std::to_string(s.fuse_min_inliers));
+  if (s.learn_wheels_min_inliers < 0 || s.learn_wheels_min_inliers > 100000)
+    fail(ErrorCode::kInvalidArgument, w + "learn_wheels_min_inliers must be in [0, 100000], got " + std::to_string(s.learn_wheels_min_inliers));
   if (s.good_min_inliers < 0 || s.good_min_inliers > 100000)
     fail(ErrorCode::kInvalidArgument, w + "good_min_inliers must be in [0, 100000], got " + std::to_string(s.good_min_inliers));
   if (!(s.degraded_after_s > 0.0 && s.degraded_after_s <= 3600.0))
@@ -147,7 +149,7 @@ void VisualLocalization::frames(std::span<const SensorFrame> frames, double t) {
     bool kept = true;
     if (!fuse) {
       ++stats_.tracked_not_fused;
-    } else if (ekf_.update_visual(d, planar_covariance(M, step.result.covariance))) {
+    } else if (ekf_.update_visual(d, planar_covariance(M, step.result.covariance), inliers >= settings_.learn_wheels_min_inliers)) {
       ++stats_.accepted;
       stats_.wheel_scale = ekf_.wheel_scale();
       stats_.wheel_scale_min = std::min(stats_.wheel_scale_min, stats_.wheel_scale);
@@ -156,6 +158,7 @@ void VisualLocalization::frames(std::span<const SensorFrame> frames, double t) {
       stats_.mean_nis += (ekf_.last_visual_chi2() - stats_.mean_nis) / static_cast<double>(stats_.accepted);
     } else {
       ++stats_.gated;
+      last_gated_s_ = t;
       kept = false;
     }
     if (kept && inliers >= settings_.good_min_inliers) last_ok_s_ = t;
@@ -167,6 +170,10 @@ void VisualLocalization::frames(std::span<const SensorFrame> frames, double t) {
     stats_.resets += step.reset ? 1 : 0;
   }
   stats_.time_s += wall_s() - w0;
+}
+
+bool VisualLocalization::confirms_odometry(double now_s) const noexcept {
+  return health(now_s) == LocalizationHealth::kGood && (last_gated_s_ < 0.0 || now_s - last_gated_s_ > settings_.lost_after_s);
 }
 
 LocalizationHealth VisualLocalization::health(double now_s) const noexcept {

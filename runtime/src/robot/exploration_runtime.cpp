@@ -72,6 +72,7 @@ struct ExplorationRuntime::MapInput {
   Pose2 odom_latest;              ///< the latest odometry when the update was asked for
   double now_s = 0.0;
   std::optional<Pose2> override_pose;
+  bool odometry_confirmed = false;  ///< visual odometry's health was good (PoseCorrector::confirm_odometry)
 };
 
 /// What a background task hands to the control thread.
@@ -85,7 +86,7 @@ struct ExplorationRuntime::Result {
   std::optional<Pose2> shift;
   std::vector<RgbdImage> images;          ///< to recycle on the control thread
   std::size_t scan_matches = 0, scan_match_rejected = 0, loop_closures = 0;
-  std::size_t relocalizations = 0;
+  std::size_t relocalizations = 0, relocalizations_held = 0;
   Pose2 relocalization;
   std::pair<float, float> relocalization_scores{0.0f, 0.0f};
   double now_s = 0.0;
@@ -281,6 +282,7 @@ std::optional<Pose2> ExplorationRuntime::map_update(MapInput& in) {
   } else {
     at = compose(corrector_.correction(), in.odom_at);
     if (settings_.pose_correction.enabled) {
+      corrector_.confirm_odometry(in.odometry_confirmed);
       at = corrector_.update(camera_points_, frames, in.odom_at, mapper_.grid(), in.t_frames);
       pose = compose(corrector_.correction(), in.odom_latest);
     }
@@ -347,6 +349,7 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
     in.odom_latest = odom_pose_;
     in.now_s = now_s;
     in.override_pose = pose_override_;
+    in.odometry_confirmed = visual_ && visual_->confirms_odometry(now_s);
     while (next_map_t_ <= stamp + 1e-9) next_map_t_ += 1.0 / settings_.map_rate_hz;
     if (worker_) {
       submit_map_update(std::move(in));
@@ -358,6 +361,7 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
     if (!pose_override_) pose_ = compose(correction_, odom_pose_);
     stats_.scan_matches = corrector_.matches();
     stats_.scan_match_rejected = corrector_.rejected();
+    stats_.relocalizations_held = corrector_.relocalizations_held();
     note_relocalization(corrector_.relocalizations(), corrector_.last_relocalization(), corrector_.last_relocalization_scores(), now_s);
     stats_.scan_match_time_s = corrector_.time_s();
     ++stats_.sets_integrated;
@@ -382,6 +386,7 @@ void ExplorationRuntime::submit_map_update(MapInput&& input) {
     r.heading_rate = corrector_.heading_rate();
     r.scan_matches = corrector_.matches();
     r.scan_match_rejected = corrector_.rejected();
+    r.relocalizations_held = corrector_.relocalizations_held();
     r.scan_match_time_s = corrector_.time_s();
     r.relocalizations = corrector_.relocalizations();
     r.relocalization = corrector_.last_relocalization();
@@ -457,6 +462,7 @@ void ExplorationRuntime::take_results() {
       }
       stats_.scan_matches = r.scan_matches;
       stats_.scan_match_rejected = r.scan_match_rejected;
+      stats_.relocalizations_held = r.relocalizations_held;
       stats_.scan_match_time_s = r.scan_match_time_s;
       note_relocalization(r.relocalizations, r.relocalization, r.relocalization_scores, r.now_s);
       grid_copy_ = std::move(r.grid);

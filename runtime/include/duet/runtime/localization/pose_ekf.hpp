@@ -17,6 +17,11 @@
 ///  - update_visual(d, R): h(x) = [R(ktheta)^T (p - k_xy); theta - ktheta]. The innovation's
 ///    squared Mahalanobis distance must stay below gate_chi2 (chi-square, 3 dof): a sudden visual
 ///    jump (a wrong match set) is rejected and counted, so it cannot move the pose control follows.
+///    With learn_wheels = false the update is a Schmidt ("consider") update: k and b keep their
+///    values (their rows of the gain are zero) while their uncertainty still enters the pose's -
+///    a weakly constrained increment (few features) corrects the pose but does not recalibrate the
+///    wheels, which would otherwise absorb its error and carry it on after vision is gone. The
+///    Joseph form keeps the covariance right for that gain.
 ///  - clone(): the location point moved to now.
 /// The velocity is the wheels' (corrected), not a state: wheel odometry at 50 Hz is not 50
 /// independent measurements of the speed - its error is systematic (tyre radius, slip on one
@@ -65,7 +70,8 @@ class PoseEkf {
   /// A visual increment d = (dx, dy, dtheta) from the clone to now (clone's robot frame) with its
   /// 3 x 3 covariance (floored at the settings' sigmas). Returns false when gated out (the
   /// state is unchanged) or when the innovation covariance is not positive definite.
-  bool update_visual(const Eigen::Vector3d& d, const Eigen::Matrix3d& covariance);
+  /// learn_wheels = false: k and b are not updated (a consider update, see above).
+  bool update_visual(const Eigen::Vector3d& d, const Eigen::Matrix3d& covariance, bool learn_wheels = true);
   /// The clone becomes the current pose (a new location point).
   void clone();
 

@@ -74,6 +74,7 @@ struct RuntimeStats {
   std::uint64_t sets_with_missing = 0;   ///< sets mapped with a missing frame (silent or garbled sensor)
   std::uint64_t blind_holds = 0;         ///< control periods held still: no frame mapped for too long
   std::size_t relocalizations = 0;       ///< wide re-matches that moved the pose (pushed, slipped)
+  std::size_t relocalizations_held = 0;  ///< wide re-matches not tried: vision confirmed the odometry
   VisualLocalizationStats visual;        ///< visual odometry + EKF (all 0 when localization.visual_odometry is off)
   std::size_t visual_sets_incomplete = 0;  ///< sets vision skipped: a sensor's frame missing
 };

@@ -153,6 +153,7 @@ struct ExploreSummary {
   std::uint64_t sets_with_missing = 0;   ///< sets mapped with a silent or garbled sensor left out
   std::uint64_t blind_holds = 0;         ///< control periods held still with no frame mapped
   std::size_t relocalizations = 0;       ///< wide re-matches that moved the pose
+  std::size_t relocalizations_held = 0;  ///< wide re-matches not tried: vision confirmed the odometry
   double occupied_on_obstacles = -1.0;   ///< share of the grid's occupied cells within 0.1 m of a true obstacle (-1: none occupied)
 };
 
