@@ -90,6 +90,7 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                                     {"failed_matches", s.visual.too_few_matches},
                                     {"failed_inliers", s.visual.too_few_inliers},
                                     {"incomplete_sets", s.visual_sets_incomplete},
+                                    {"busy_sets", s.visual_sets_busy},
                                     {"location_points", s.visual.location_points},
                                     {"resets", s.visual.resets},
                                     {"time_s", s.visual.time_s},

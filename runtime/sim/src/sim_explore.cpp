@@ -317,6 +317,7 @@ ExploreSummary SimExplore::summary() const {
   s.visual_odometry = settings_.runtime.visual_odometry.enabled;
   s.visual = rs.visual;
   s.visual_sets_incomplete = rs.visual_sets_incomplete;
+  s.visual_sets_busy = rs.visual_sets_busy;
   if (const auto h = runtime_->localization_health()) s.localization_health = to_string(*h);
   s.execution = settings_.runtime.execution;
   s.realtime = settings_.realtime;

@@ -106,27 +106,44 @@ Pose2 VisualLocalization::odometry(const OdometryMsg& m) {
 }
 
 void VisualLocalization::frames(std::span<const SensorFrame> frames, double t) {
-  const double w0 = wall_s();
+  const Job job = begin(t);
+  finish(job, track(frames, job));
+}
+
+VisualLocalization::Job VisualLocalization::begin(double t) {
   if (start_s_ < 0.0) start_s_ = t;
-  const Pose2 at_frames = pose_at(t);               // the fused pose when the frames were taken
-  const Pose2 lag = between(at_frames, ekf_.pose());  // the EKF's motion since then
-  const Eigen::Isometry3d guess =
-      tracking_ ? to_iso(last_track_pose_).inverse() * to_iso(at_frames) : Eigen::Isometry3d::Identity();
-  const VisualOdometer::Step step = odometer_.track(frames, guess);
-  ++stats_.sets;
-  last_track_pose_ = at_frames;
+  Job job;
+  job.t = t;
+  job.at_frames = pose_at(t);  // the fused pose when the frames were taken
+  if (tracking_) job.guess = to_iso(last_track_pose_).inverse() * to_iso(job.at_frames);
+  last_track_pose_ = job.at_frames;
   tracking_ = true;
-  if (!odometer_.has_keyframe()) {  // nothing to track from yet (a blank first view)
+  return job;
+}
+
+VisualLocalization::Tracked VisualLocalization::track(std::span<const SensorFrame> frames, const Job& job) {
+  const double w0 = wall_s();
+  Tracked out;
+  out.step = odometer_.track(frames, job.guess);
+  out.has_keyframe = odometer_.has_keyframe();
+  out.time_s = wall_s() - w0;
+  return out;
+}
+
+void VisualLocalization::finish(const Job& job, const Tracked& tracked) {
+  const VisualOdometer::Step& step = tracked.step;
+  const Pose2 lag = between(job.at_frames, ekf_.pose());  // the EKF's motion since the frames were taken
+  ++stats_.sets;
+  stats_.time_s += tracked.time_s;
+  if (!tracked.has_keyframe) {  // nothing to track from yet (a blank first view)
     ++stats_.failed;
     ++stats_.too_few_features;
-    stats_.time_s += wall_s() - w0;
     return;
   }
   if (step.first) {
     ekf_.clone();
     clone_lag_ = lag;
     ++stats_.location_points;
-    stats_.time_s += wall_s() - w0;
     return;
   }
   stats_.last_inliers = step.result.inliers;
@@ -158,10 +175,10 @@ void VisualLocalization::frames(std::span<const SensorFrame> frames, double t) {
       stats_.mean_nis += (ekf_.last_visual_chi2() - stats_.mean_nis) / static_cast<double>(stats_.accepted);
     } else {
       ++stats_.gated;
-      last_gated_s_ = t;
+      last_gated_s_ = job.t;
       kept = false;
     }
-    if (kept && inliers >= settings_.good_min_inliers) last_ok_s_ = t;
+    if (kept && inliers >= settings_.good_min_inliers) last_ok_s_ = job.t;
   }
   if (step.new_keyframe) {
     ekf_.clone();
@@ -169,7 +186,6 @@ void VisualLocalization::frames(std::span<const SensorFrame> frames, double t) {
     ++stats_.location_points;
     stats_.resets += step.reset ? 1 : 0;
   }
-  stats_.time_s += wall_s() - w0;
 }
 
 bool VisualLocalization::confirms_odometry(double now_s) const noexcept {

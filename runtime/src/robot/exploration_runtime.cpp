@@ -167,10 +167,14 @@ ExplorationRuntime::ExplorationRuntime(const Profile& profile, ChassisInterface&
   if (settings_.execution == Execution::kBackground) {
     link_ = std::make_unique<Link>(*this);
     worker_ = std::make_unique<BackgroundWorker>(settings_.background_threads);
+    if (visual_) visual_worker_ = std::make_unique<BackgroundWorker>(settings_.background_threads);
   }
 }
 
-ExplorationRuntime::~ExplorationRuntime() { worker_.reset(); }  // before the members its tasks use
+ExplorationRuntime::~ExplorationRuntime() {  // the workers first: their tasks use the members
+  worker_.reset();
+  visual_worker_.reset();
+}
 
 ExplorerState ExplorationRuntime::state() const {
   if (!worker_) return explorer_.state();
@@ -482,13 +486,19 @@ void ExplorationRuntime::drain() {
   if (!worker_) return;
   worker_->wait_idle();
   take_results();
+  if (visual_worker_) {
+    visual_worker_->wait_idle();
+    finish_visual(last_now_s_);
+  }
 }
 
 void ExplorationRuntime::tick(double now_s) {
   const double w0 = wall_s();
   if (last_tick_wall_ >= 0.0) period_.add(w0 - last_tick_wall_);
   last_tick_wall_ = w0;
+  last_now_s_ = now_s;
   if (worker_) take_results();
+  finish_visual(now_s);  // kBackground: the last set's visual update, if the front end is done
   const std::size_t n = sensors_.size();
   // 1. Odometry (pose at up to the odometry rate) and frames into the synchronizer, through the
   // input guard.

@@ -22,7 +22,11 @@
 /// The output is an odom frame in the sense of REP 105: continuous, never jumping more than a
 /// gated visual update moves it. The scan-to-map correction and loop closure stay on top of it
 /// as the map <- odom correction (pose_corrector.hpp, loop_closure.hpp).
-/// Thread safety: one thread at a time.
+/// Thread safety: one thread at a time - except that frames() is also offered in three parts, so
+/// that the front end (the expensive part, ~10 ms per set of two 640 x 480 frames) can run off
+/// the control thread: begin() and finish() on the thread that calls odometry(), track() on any
+/// one other thread in between (it touches only the visual odometer). One set at a time: the
+/// next begin() after the previous finish().
 #include <duet/runtime/localization/localization_health.hpp>
 #include <duet/runtime/localization/visual_localization_settings.hpp>
 #include <duet/runtime/robot/robot_io.hpp>
@@ -47,7 +51,7 @@ struct VisualLocalizationStats {
   std::size_t location_points = 0;
   std::size_t resets = 0;          ///< location points forced after failures (the chain started over)
   std::size_t last_inliers = 0;
-  double time_s = 0.0;             ///< wall time in frames() [s]
+  double time_s = 0.0;             ///< wall time of the front end (track()) [s]
   /// The wheels' errors as the EKF has learnt them (pose_ekf.hpp): speed scale (now, lowest,
   /// highest) and yaw-rate bias now [rad/s].
   double wheel_scale = 1.0, wheel_scale_min = 1.0, wheel_scale_max = 1.0;
@@ -63,8 +67,30 @@ class VisualLocalization {
 
   /// One wheel odometry message; returns the fused pose (the first message sets the start).
   Pose2 odometry(const OdometryMsg& m);
-  /// One synchronised set (at least one frame with colour for vision to work), taken at t [s].
+  /// One synchronised set (at least one frame with colour for vision to work), taken at t [s]:
+  /// finish(begin(t), track(frames, begin's job)).
   void frames(std::span<const SensorFrame> frames, double t);
+
+  /// A set taken at t, as begin() prepares it for track().
+  struct Job {
+    double t = 0.0;
+    Pose2 at_frames;  ///< the fused pose at t
+    Eigen::Isometry3d guess = Eigen::Isometry3d::Identity();  ///< the EKF's motion since the previous set's stamp
+  };
+  /// What track() measured, for finish().
+  struct Tracked {
+    VisualOdometer::Step step;
+    bool has_keyframe = false;  ///< the odometer has a location point (false: a blank first view)
+    double time_s = 0.0;        ///< wall time of track() [s]
+  };
+  /// The odometry thread: the guess for the set taken at t (it becomes the previous set).
+  [[nodiscard]] Job begin(double t);
+  /// Any thread, one set at a time: the front end on the set (visual_odometer.hpp). Throws what
+  /// VisualOdometer::track throws (a malformed frame, named).
+  [[nodiscard]] Tracked track(std::span<const SensorFrame> frames, const Job& job);
+  /// The odometry thread: fuses what track() measured into the EKF, carried over the EKF's
+  /// motion since the frames' stamp - however long the front end took.
+  void finish(const Job& job, const Tracked& tracked);
 
   [[nodiscard]] Pose2 pose() const noexcept { return ekf_.pose(); }
   [[nodiscard]] Twist twist() const noexcept { return ekf_.twist(); }

@@ -77,6 +77,7 @@ struct RuntimeStats {
   std::size_t relocalizations_held = 0;  ///< wide re-matches not tried: vision confirmed the odometry
   VisualLocalizationStats visual;        ///< visual odometry + EKF (all 0 when localization.visual_odometry is off)
   std::size_t visual_sets_incomplete = 0;  ///< sets vision skipped: a sensor's frame missing
+  std::size_t visual_sets_busy = 0;        ///< kBackground: sets vision skipped, the front end still on the last one
 };
 
 /// Wall-clock timing of the loop (meaningful when the loop is paced by the wall clock).
@@ -175,8 +176,10 @@ class ExplorationRuntime {
   void restart_time();
   void note_relocalization(std::size_t count, const Pose2& offset, std::pair<float, float> scores, double now_s);
   void take_inputs(double now_s);
-  /// Visual odometry on a synchronised set (all sensors' frames), the EKF's update, the health.
+  /// Visual odometry on a synchronised set (all sensors' frames), the EKF's update, the health;
+  /// in kBackground the front end runs on visual_worker_ and finish_visual() fuses its result.
   void track_visual(const std::vector<RgbdImage>& images, const ApproximateTimeCore::Set& set, double now_s);
+  void finish_visual(double now_s);  ///< kBackground: fuses a finished front end's result, if any
   void update_health(double now_s);  ///< vision's health at now_s, a change logged
 
   CameraPoints camera_points_;  ///< the map update's frames, back-projected once (owned by whoever runs map_update)
@@ -194,7 +197,7 @@ class ExplorationRuntime {
   std::unique_ptr<VisualLocalization> visual_;  ///< localization.visual_odometry: wheels + vision, the odometry the rest sees
   std::optional<LocalizationHealth> health_;
   double last_visual_t_ = -1.0;  ///< stamp of the last set vision tracked
-  double last_now_s_ = 0.0;
+  double last_now_s_ = 0.0;     ///< the last tick's time
   InputGuard guard_;
   ApproximateTimeCore sync_;
   std::unordered_map<std::uint64_t, RgbdImage> frames_;     ///< payloads waiting in the synchronizer, by id
@@ -231,6 +234,14 @@ class ExplorationRuntime {
   std::vector<Event> inbox_;                         ///< controller -> navigator events
   std::mutex results_mutex_;
   std::vector<Result> results_;                      ///< background -> control results
+  // ---- kBackground with vision: the front end's set in flight (one at a time)
+  bool visual_in_flight_ = false;
+  VisualLocalization::Job visual_job_;               ///< control side: begin()'s job for the set in flight
+  std::vector<RgbdImage> visual_images_;             ///< the set in flight (copies; the worker reads them)
+  std::vector<SensorFrame> visual_views_;            ///< views into visual_images_
+  std::mutex visual_mutex_;
+  std::optional<VisualLocalization::Tracked> visual_result_;  ///< worker -> control
+  std::unique_ptr<BackgroundWorker> visual_worker_;  ///< destroyed before the members its task uses
   std::unique_ptr<BackgroundWorker> worker_;         ///< last: destroyed first (its tasks use the members above)
 };
 

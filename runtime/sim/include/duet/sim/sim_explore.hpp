@@ -138,6 +138,7 @@ struct ExploreSummary {
   bool visual_odometry = false;          ///< localization.visual_odometry was on
   VisualLocalizationStats visual;        ///< its counters
   std::size_t visual_sets_incomplete = 0;
+  std::size_t visual_sets_busy = 0;     ///< background execution: sets skipped while the front end ran
   std::string localization_health;       ///< at the end: good / degraded / lost ("" without vision)
   std::size_t scan_matches = 0;          ///< map updates whose scan match was accepted
   std::size_t scan_match_rejected = 0;   ///< map updates whose scan match was not (correction kept)
