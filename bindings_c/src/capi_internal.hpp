@@ -50,6 +50,14 @@ enum class Kind : std::uint8_t { kDevice = 1, kCloud = 2, kGrid = 3, kPlanner = 
 
 [[nodiscard]] const char* kind_name(Kind kind) noexcept;
 
+/// A C struct with every byte zero (padding included), so that outputs are deterministic bytes.
+template <class T>
+T blank() {
+  T t;
+  std::memset(&t, 0, sizeof t);
+  return t;
+}
+
 struct Object {
   explicit Object(Kind k) noexcept : kind(k) {}
   Object(const Object&) = delete;

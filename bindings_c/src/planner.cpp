@@ -28,14 +28,6 @@ void with_planner(duet_planner handle, const char* fn, F&& body) noexcept {
   });
 }
 
-/// A C struct with every byte zero (padding included), so that outputs are deterministic bytes.
-template <class T>
-T blank() {
-  T t;
-  std::memset(&t, 0, sizeof t);
-  return t;
-}
-
 /// Writes a result struct to the caller (all bytes, padding included).
 template <class T>
 void put(T* out, const T& value) {

@@ -11,14 +11,6 @@
 namespace duet::capi {
 namespace {
 
-/// A C struct with every byte zero (padding included).
-template <class T>
-T blank() {
-  T t;
-  std::memset(&t, 0, sizeof t);
-  return t;
-}
-
 /// Runs the kernel's validate(c); its duet::Error (which names the C++ struct and field, the
 /// same field names as the C mirror) is rethrown prefixed with the C argument name.
 template <class C>

@@ -24,7 +24,7 @@ void validate(const ClusteringSettings& s) {
 
 namespace {
 
-constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+constexpr std::uint32_t kNoLabel = std::numeric_limits<std::uint32_t>::max();
 constexpr std::uint64_t kEmpty = std::numeric_limits<std::uint64_t>::max();
 constexpr std::size_t kBlock = 1 << 14;
 
@@ -80,7 +80,7 @@ struct CellHash {
     while (true) {
       const std::uint64_t k = keys[h];
       if (k == key) return cells[h];
-      if (k == kEmpty) return kNone;
+      if (k == kEmpty) return kNoLabel;
       h = (h + 1) & mask;
     }
   }
@@ -93,7 +93,7 @@ std::vector<std::vector<std::uint32_t>> euclidean_clusters(PointsView points, st
                                                            ClusteringWorkspace& ws) {
   validate(settings);
   const std::size_t n = points.size();
-  if (n >= kNone) fail(ErrorCode::kInvalidArgument, "euclidean_clusters: more than 2^32-2 points");
+  if (n >= kNoLabel) fail(ErrorCode::kInvalidArgument, "euclidean_clusters: more than 2^32-2 points");
   // Gather the selected finite points: local index -> input index.
   std::vector<std::uint32_t> src;
   if (subset.empty()) {
@@ -232,7 +232,7 @@ std::vector<std::vector<std::uint32_t>> euclidean_clusters(PointsView points, st
           continue;
         const std::uint32_t nc = table.find(static_cast<std::uint64_t>(nx) | (static_cast<std::uint64_t>(ny) << bits[0]) |
                                             (static_cast<std::uint64_t>(nz) << (bits[0] + bits[1])));
-        if (nc == kNone) continue;
+        if (nc == kNoLabel) continue;
         const std::uint32_t b0 = ws.cell_begin[nc], b1 = ws.cell_begin[nc + 1];
         if (clique) {
           if (uf.find(a0) == uf.find(b0)) continue;
@@ -254,7 +254,7 @@ std::vector<std::vector<std::uint32_t>> euclidean_clusters(PointsView points, st
   });
 
   // Components -> clusters of input indices (canonical order, see header).
-  ws.label.assign(m, kNone);
+  ws.label.assign(m, kNoLabel);
   std::vector<std::uint32_t> size_of_root(m, 0);
   for (std::uint32_t j = 0; j < m; ++j) ++size_of_root[uf.find(j)];
   std::vector<std::vector<std::uint32_t>> clusters;
@@ -262,7 +262,7 @@ std::vector<std::vector<std::uint32_t>> euclidean_clusters(PointsView points, st
     const std::uint32_t root = uf.find(j);
     const std::uint32_t s = size_of_root[root];
     if (s < settings.min_size || s > settings.max_size) continue;
-    if (ws.label[root] == kNone) {
+    if (ws.label[root] == kNoLabel) {
       ws.label[root] = static_cast<std::uint32_t>(clusters.size());
       clusters.emplace_back();
       clusters.back().reserve(s);

@@ -12,11 +12,11 @@
 namespace duet {
 namespace {
 
-constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+constexpr std::uint32_t kNoMatch = std::numeric_limits<std::uint32_t>::max();
 
 /// Best and second-best distance and the best's index over the candidates of one descriptor.
 struct Nearest {
-  std::uint32_t best = 257, second = 257, index = kNone;
+  std::uint32_t best = 257, second = 257, index = kNoMatch;
 };
 
 /// Candidate filter: every train (brute force) or those within the window (guided).
@@ -84,10 +84,10 @@ void match(std::span<const Descriptor256> query, std::span<const Descriptor256> 
   std::vector<std::uint32_t> backward;
   if (s.cross_check) {
     // Only trains some query chose need their own nearest query.
-    backward.assign(train.size(), kNone);
+    backward.assign(train.size(), kNoMatch);
     std::vector<char> wanted(train.size(), 0);
     for (const auto& n : forward)
-      if (n.index != kNone) wanted[n.index] = 1;
+      if (n.index != kNoMatch) wanted[n.index] = 1;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, train.size(), 64), [&](const auto& r) {
       for (std::size_t j = r.begin(); j < r.end(); ++j)
         if (wanted[j]) backward[j] = nearest(train[j], j, query, accept_tq).index;
@@ -96,7 +96,7 @@ void match(std::span<const Descriptor256> query, std::span<const Descriptor256> 
   const auto max_d = static_cast<std::uint32_t>(s.max_distance);
   for (std::size_t i = 0; i < query.size(); ++i) {
     const Nearest& n = forward[i];
-    if (n.index == kNone || n.best > max_d) continue;
+    if (n.index == kNoMatch || n.best > max_d) continue;
     if (s.ratio < 1.0f && n.second <= 256 && !(static_cast<float>(n.best) < s.ratio * static_cast<float>(n.second))) continue;
     if (s.cross_check && backward[n.index] != i) continue;
     out.push_back({static_cast<std::uint32_t>(i), n.index, n.best});

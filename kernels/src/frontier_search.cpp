@@ -284,9 +284,9 @@ void drop_enclosed_pockets(const InflatedGrid& g, std::size_t min_cells, Frontie
 /// by reset_approach()).
 void mark_approach_cells(const InflatedGrid& g, float radius_m, const std::vector<std::uint8_t>& has_traversable,
                          FrontierWorkspace& ws) {
-  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  constexpr std::uint32_t kUnclaimed = std::numeric_limits<std::uint32_t>::max();
   const std::size_t n = g.cell_count();
-  if (ws.approach_src.size() != n) ws.approach_src.assign(n, kNone);
+  if (ws.approach_src.size() != n) ws.approach_src.assign(n, kUnclaimed);
   ws.approach_queue.clear();
   const int w = g.width, h = g.height;
   const auto uw = static_cast<std::uint32_t>(w);
@@ -296,7 +296,7 @@ void mark_approach_cells(const InflatedGrid& g, float radius_m, const std::vecto
     if (ws.mask[f] != 1 || has_traversable[static_cast<std::size_t>(ws.label[f])]) continue;
     const int x = static_cast<int>(f % uw), y = static_cast<int>(f / uw);
     if (x == 0 || y == 0 || x == w - 1 || y == h - 1) continue;  // not connected (§3.2)
-    if (ws.approach_src[f] != kNone) continue;                    // claimed by an earlier wave
+    if (ws.approach_src[f] != kUnclaimed) continue;                    // claimed by an earlier wave
     ws.approach_src[f] = f;
     ws.approach_queue.push_back(f);
   }
@@ -309,7 +309,7 @@ void mark_approach_cells(const InflatedGrid& g, float radius_m, const std::vecto
       const int nx = x + kDx[d], ny = y + kDy[d];
       if (!g.in_bounds(nx, ny)) continue;
       const std::size_t ni = g.index(nx, ny);
-      if (ws.approach_src[ni] != kNone || g.state[ni] != CellState::kFree) continue;
+      if (ws.approach_src[ni] != kUnclaimed || g.state[ni] != CellState::kFree) continue;
       const auto ddx = static_cast<float>(nx - sx), ddy = static_cast<float>(ny - sy);
       if (ddx * ddx + ddy * ddy > r2) continue;
       ws.approach_src[ni] = src;

@@ -19,6 +19,9 @@
 
 namespace duet::app {
 
+/// Standard error is a terminal (progress lines are drawn there).
+[[nodiscard]] bool stderr_is_tty();
+
 /// --config FILE and --set KEY=VALUE on a sub-command (profile_command.cpp), and the overlays they give.
 void add_overlay_options(CLI::App* cmd, std::vector<std::string>& configs, std::vector<std::string>& sets);
 [[nodiscard]] std::vector<ProfileOverlay> overlays(const std::vector<std::string>& configs, const std::vector<std::string>& sets);

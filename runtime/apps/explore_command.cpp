@@ -72,8 +72,6 @@ struct CompareOptions {
   bool quiet = false;
 };
 
-bool stderr_is_tty() { return ::isatty(2) != 0; }
-
 double parse_sensor_rate(const std::string& s) {
   if (s == "pipeline") return 0.0;
   if (s == "full") return -1.0;  // the profile's rate

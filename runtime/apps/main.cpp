@@ -7,8 +7,12 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <iostream>
+
+bool duet::app::stderr_is_tty() { return ::isatty(2) != 0; }
 
 int main(int argc, char** argv) {
   CLI::App app{"duet: autonomous exploration and mapping with two RGB-D sensors (" DUET_VERSION_STRING ")"};

@@ -75,8 +75,6 @@ Eigen::Vector3f estimate_up(std::size_t frames, const PoseOf& pose_of) {
   return sum.normalized();
 }
 
-bool stderr_is_tty() { return isatty(fileno(stderr)) != 0; }
-
 int run_map(const MapOptions& o) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();

@@ -56,8 +56,6 @@ using detail::node_kind;
 using detail::Reader;
 using namespace detail::ranges;
 
-constexpr double kDegToRad = 0.017453292519943295;
-
 // ---------------------------------------------------------------------------------------------
 // Reading the profile (strict YAML reading: yaml_reader.hpp).
 

@@ -8,6 +8,8 @@
 
 namespace duet::detail::ranges {
 
+inline constexpr double kDegToRad = 0.017453292519943295;
+
 inline constexpr Range kRadius{0.0, 5.0, true, false, "m"};
 inline constexpr Range kFootprint{0.0, 10.0, true, false, "m"};
 inline constexpr Range kWheelBase{0.0, 5.0, true, false, "m"};

@@ -21,8 +21,6 @@ using detail::format_number;
 using detail::in_range;
 using detail::Range;
 
-constexpr double kDegToRad = 0.017453292519943295;
-
 /// "Struct.field must be in RANGE, got V": the form validate(Profile) locates at its key.
 void check(const char* struct_name, const std::string& field, double v, const Range& r) {
   if (in_range(v, r)) return;
