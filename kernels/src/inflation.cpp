@@ -24,7 +24,7 @@ void validate(const InflationSettings& s) {
 
 namespace {
 
-constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kUnreached = std::numeric_limits<float>::infinity();
 constexpr std::size_t kColumnBlock = 128;  // columns per task of the vertical pass (fixed: thread-count independent)
 
 /// 1D squared-distance transform of one row (Felzenszwalb & Huttenlocher, lower envelope of the
@@ -34,7 +34,7 @@ constexpr std::size_t kColumnBlock = 128;  // columns per task of the vertical p
 void row_transform(const float* col_d, int w, std::int64_t* d2, int* v, std::int64_t* F) {
   int k = -1;  // index of the rightmost parabola of the envelope
   for (int q = 0; q < w; ++q) {
-    if (!(col_d[q] < kInf)) continue;
+    if (!(col_d[q] < kUnreached)) continue;
     const auto g = static_cast<std::int64_t>(col_d[q]);
     const std::int64_t Fq = g * g + static_cast<std::int64_t>(q) * q;
     // Pop parabolas hidden by q: s(q, v[k]) <= s(v[k], v[k-1]), compared by cross-multiplication
@@ -101,7 +101,7 @@ void inflate(const GridView& grid, const InflationSettings& s, InflatedGrid& out
         st[row + x] = c;
         const bool blocked = c == CellState::kOccupied ||
                              (c == CellState::kUnknown && (std::isnan(l) ? unknown_blocks : uncertain_blocks));
-        cl[row + x] = blocked ? 0.0f : (prev ? prev[x] + 1.0f : kInf);
+        cl[row + x] = blocked ? 0.0f : (prev ? prev[x] + 1.0f : kUnreached);
       }
     }
     for (int y = h - 2; y >= 0; --y) {
@@ -121,7 +121,7 @@ void inflate(const GridView& grid, const InflationSettings& s, InflatedGrid& out
       row_transform(cl + row, w, d2.data(), v.data(), F.data());
       for (int x = 0; x < w; ++x) {
         const std::size_t i = row + static_cast<std::size_t>(x);
-        const float c = d2[x] < 0 ? kInf : static_cast<float>(res * std::sqrt(static_cast<double>(d2[x])));
+        const float c = d2[x] < 0 ? kUnreached : static_cast<float>(res * std::sqrt(static_cast<double>(d2[x])));
         cl[i] = c;
         tr[i] = static_cast<std::uint8_t>(st[i] == CellState::kFree && c > radius);
       }
