@@ -30,6 +30,8 @@ def run(args, fault, seed):
     cmd = [args.duet, "explore", "-w", args.world, "-s", str(seed), "-t", str(args.max_time), "-j", "1", "-q", "-o", out]
     if fault != "none":
         cmd += ["--fault", fault]
+    for kv in args.set:
+        cmd += ["--set", kv]
     p = subprocess.run(cmd, capture_output=True, text=True)
     if p.returncode != 0:
         return fault, seed, {"error": p.stderr.strip()[-300:]}
@@ -46,6 +48,8 @@ def main():
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--out", default="out/faults")
     ap.add_argument("--faults", default=",".join(["none"] + FAULTS))
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="a profile key for every run (duet explore --set), repeatable")
     args = ap.parse_args()
     faults = args.faults.split(",")
     results = {}

@@ -78,6 +78,7 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                {"scan_matches", s.scan_matches},
                {"scan_match_rejected", s.scan_match_rejected},
                {"relocalizations_held", s.relocalizations_held},
+               {"relocalizations_asked", s.relocalizations_asked},
                {"scan_match_time_s", s.scan_match_time_s}};
   if (s.visual_odometry)
     j["pose"]["visual_odometry"] = {{"health_end", s.localization_health},

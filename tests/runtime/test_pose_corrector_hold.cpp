@@ -2,7 +2,8 @@
 // relocalised by the wide re-match - unless the odometry is confirmed (vision tracking well, no
 // visual jump gated out), when the wide re-match is not tried and the hold is counted. And the
 // runtime: a kidnapped robot with vision fused is still relocalised (its first view after the
-// move is a visual jump the gate rejects, so vision does not confirm the wheels then).
+// move is a visual jump the gate rejects, so vision does not confirm the wheels then, and the
+// jump asks for the wide re-match at once: contradict_odometry).
 #include <duet/runtime/config/profile.hpp>
 #include <duet/runtime/localization/pose_corrector.hpp>
 #include <duet/runtime/mapping/mapper.hpp>
@@ -14,17 +15,21 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 namespace duet {
 namespace {
 
 struct Kidnap {
-  std::size_t relocalizations = 0, held = 0;
+  std::size_t relocalizations = 0, held = 0, asked = 0;
   float error_m = 0.0f;  ///< of the last pose the corrector returned, against the truth
+  int first_at = -1;     ///< the update after the carry that relocalised first (-1: none)
 };
 
-Kidnap kidnap(bool confirmed) {
+/// `confirmed`: confirm_odometry(true) from the carry on; `contradicted`: contradict_odometry()
+/// before the first update after it (vision gated out the jump).
+Kidnap kidnap(bool confirmed, bool contradicted = false) {
   const Profile profile = builtin_profile("dual");
   const sim::World world = sim::builtin_world("lab");
   const sim::RgbdRenderer renderer(world);
@@ -53,12 +58,16 @@ Kidnap kidnap(bool confirmed) {
   truth.x += 0.6f * std::cos(truth.theta + 1.5708f);
   truth.y += 0.6f * std::sin(truth.theta + 1.5708f);
   corrector.confirm_odometry(confirmed);
+  if (contradicted) corrector.contradict_odometry();
   Pose2 at;
+  int first_at = -1;
   for (int k = 0; k < 6; ++k, t += 0.5) {
     const auto frames = frames_at(truth, 100 + 2 * static_cast<std::uint64_t>(k));
     at = corrector.update(frames, odom, mapper.grid(), t);  // not integrated: the map stays right
+    if (first_at < 0 && corrector.relocalizations() > 0) first_at = k;
   }
-  return {corrector.relocalizations(), corrector.relocalizations_held(), std::hypot(at.x - truth.x, at.y - truth.y)};
+  return {corrector.relocalizations(), corrector.relocalizations_held(), corrector.relocalizations_asked(),
+          std::hypot(at.x - truth.x, at.y - truth.y), first_at};
 }
 
 TEST(PoseCorrectorHold, AConfirmedOdometryHoldsTheWideRematch) {
@@ -70,6 +79,23 @@ TEST(PoseCorrectorHold, AConfirmedOdometryHoldsTheWideRematch) {
   EXPECT_EQ(held.relocalizations, 0u);
   EXPECT_GE(held.held, 1u);
   EXPECT_GT(held.error_m, 0.3f) << "the pose stays with the confirmed odometry";
+}
+
+// Vision saw the jump (a gated visual increment): the wide re-match runs at the very next update,
+// before the matcher has grown suspicious - and even while vision's health still confirms the
+// wheels (the contradiction is the newer news).
+TEST(PoseCorrectorHold, AContradictedOdometryIsRelocalisedAtTheNextUpdate) {
+  const Kidnap free = kidnap(false);
+  const Kidnap asked = kidnap(false, true);
+  std::printf("carried 0.6 m: first relocalised at update %d on suspicion, %d when asked\n", free.first_at, asked.first_at);
+  EXPECT_EQ(asked.asked, 1u);
+  EXPECT_EQ(free.asked, 0u);
+  EXPECT_EQ(asked.first_at, 0);
+  EXPECT_LE(asked.first_at, free.first_at);
+  EXPECT_LT(asked.error_m, 0.15f);
+  const Kidnap both = kidnap(true, true);
+  EXPECT_EQ(both.first_at, 0) << "the contradiction overrides the confirmation";
+  EXPECT_LT(both.error_m, 0.15f);
 }
 
 TEST(PoseCorrectorHold, AKidnappedRobotWithVisionIsStillRelocalised) {
@@ -86,6 +112,7 @@ TEST(PoseCorrectorHold, AKidnappedRobotWithVisionIsStillRelocalised) {
   const auto sum = run.summary();
   EXPECT_EQ(sum.faults.at(0).injected, 1u);
   EXPECT_GE(sum.visual.gated, 1u) << "the view after the move is a visual jump";
+  EXPECT_GE(sum.relocalizations_asked, 1u) << "... which asks the scan matcher for a wide re-match";
   EXPECT_GE(sum.relocalizations, 1u);
   EXPECT_LT(sum.pose_error_m, 0.15);
   EXPECT_EQ(sum.collisions, 0u);

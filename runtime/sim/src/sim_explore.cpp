@@ -335,6 +335,7 @@ ExploreSummary SimExplore::summary() const {
   s.blind_holds = rs.blind_holds;
   s.relocalizations = rs.relocalizations;
   s.relocalizations_held = rs.relocalizations_held;
+  s.relocalizations_asked = rs.relocalizations_asked;
   s.occupied_on_obstacles = occupied_on_obstacles();
   return s;
 }

@@ -20,6 +20,7 @@ using detail::describe;
 using detail::format_number;
 using detail::in_range;
 using detail::Range;
+using detail::ranges::kDegToRad;
 
 /// "Struct.field must be in RANGE, got V": the form validate(Profile) locates at its key.
 void check(const char* struct_name, const std::string& field, double v, const Range& r) {

@@ -48,6 +48,7 @@ void write_runtime_outputs(ExplorationRuntime& rt, const Trajectory& trajectory,
   j["loop_closures"] = st.loop_closures;
   j["relocalizations"] = st.relocalizations;
   j["relocalizations_held"] = st.relocalizations_held;
+  j["relocalizations_asked"] = st.relocalizations_asked;
   j["frames_received"] = st.frames_received;
   j["frame_drops"] = st.frame_drops;
   j["odometry_received"] = st.odometry_received;

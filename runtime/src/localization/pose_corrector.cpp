@@ -141,8 +141,11 @@ Pose2 PoseCorrector::update(const CameraPoints& points, std::span<const SensorFr
     const int recent = std::popcount(suspect_ & 0x1Fu);  // of the last 5
     // Only against the current grid: an aged reference lacks what the robot has just seen, and
     // a wide window then finds false fits of the scan's few known parts.
-    const bool wide_due = pc.relocalize_after > 0 && pc.reference_age_s <= 0.0 && (recent >= pc.relocalize_after || lost);
-    if (wide_due && odometry_confirmed_) {
+    const bool asked = relocalize_asked_ && pc.relocalize_after > 0 && pc.reference_age_s <= 0.0;
+    relocalize_asked_ = false;
+    if (asked) ++relocalizations_asked_;
+    const bool wide_due = pc.relocalize_after > 0 && pc.reference_age_s <= 0.0 && (recent >= pc.relocalize_after || lost || asked);
+    if (wide_due && odometry_confirmed_ && !asked) {
       suspect_ = 0;
       ++relocalizations_held_;
     } else if (wide_due) {

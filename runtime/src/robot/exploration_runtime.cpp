@@ -73,6 +73,7 @@ struct ExplorationRuntime::MapInput {
   double now_s = 0.0;
   std::optional<Pose2> override_pose;
   bool odometry_confirmed = false;  ///< visual odometry's health was good (PoseCorrector::confirm_odometry)
+  bool odometry_contradicted = false;  ///< vision gated out a jump since the last update (PoseCorrector::contradict_odometry)
 };
 
 /// What a background task hands to the control thread.
@@ -86,7 +87,7 @@ struct ExplorationRuntime::Result {
   std::optional<Pose2> shift;
   std::vector<RgbdImage> images;          ///< to recycle on the control thread
   std::size_t scan_matches = 0, scan_match_rejected = 0, loop_closures = 0;
-  std::size_t relocalizations = 0, relocalizations_held = 0;
+  std::size_t relocalizations = 0, relocalizations_held = 0, relocalizations_asked = 0;
   Pose2 relocalization;
   std::pair<float, float> relocalization_scores{0.0f, 0.0f};
   double now_s = 0.0;
@@ -287,6 +288,7 @@ std::optional<Pose2> ExplorationRuntime::map_update(MapInput& in) {
     at = compose(corrector_.correction(), in.odom_at);
     if (settings_.pose_correction.enabled) {
       corrector_.confirm_odometry(in.odometry_confirmed);
+      if (in.odometry_contradicted) corrector_.contradict_odometry();
       at = corrector_.update(camera_points_, frames, in.odom_at, mapper_.grid(), in.t_frames);
       pose = compose(corrector_.correction(), in.odom_latest);
     }
@@ -354,6 +356,10 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
     in.now_s = now_s;
     in.override_pose = pose_override_;
     in.odometry_confirmed = visual_ && visual_->confirms_odometry(now_s);
+    if (visual_) {  // vision saw a jump the wheels did not make since the last map update
+      in.odometry_contradicted = visual_->stats().gated > visual_gated_seen_;
+      visual_gated_seen_ = visual_->stats().gated;
+    }
     while (next_map_t_ <= stamp + 1e-9) next_map_t_ += 1.0 / settings_.map_rate_hz;
     if (worker_) {
       submit_map_update(std::move(in));
@@ -366,6 +372,7 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
     stats_.scan_matches = corrector_.matches();
     stats_.scan_match_rejected = corrector_.rejected();
     stats_.relocalizations_held = corrector_.relocalizations_held();
+    stats_.relocalizations_asked = corrector_.relocalizations_asked();
     note_relocalization(corrector_.relocalizations(), corrector_.last_relocalization(), corrector_.last_relocalization_scores(), now_s);
     stats_.scan_match_time_s = corrector_.time_s();
     ++stats_.sets_integrated;
@@ -391,6 +398,7 @@ void ExplorationRuntime::submit_map_update(MapInput&& input) {
     r.scan_matches = corrector_.matches();
     r.scan_match_rejected = corrector_.rejected();
     r.relocalizations_held = corrector_.relocalizations_held();
+    r.relocalizations_asked = corrector_.relocalizations_asked();
     r.scan_match_time_s = corrector_.time_s();
     r.relocalizations = corrector_.relocalizations();
     r.relocalization = corrector_.last_relocalization();
@@ -467,6 +475,7 @@ void ExplorationRuntime::take_results() {
       stats_.scan_matches = r.scan_matches;
       stats_.scan_match_rejected = r.scan_match_rejected;
       stats_.relocalizations_held = r.relocalizations_held;
+      stats_.relocalizations_asked = r.relocalizations_asked;
       stats_.scan_match_time_s = r.scan_match_time_s;
       note_relocalization(r.relocalizations, r.relocalization, r.relocalization_scores, r.now_s);
       grid_copy_ = std::move(r.grid);

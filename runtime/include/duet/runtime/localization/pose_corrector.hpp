@@ -43,6 +43,14 @@ class PoseCorrector {
   /// score of 0.62 against 0.17 - then 2.5 m of error and a collision); a robot that is pushed
   /// or lifted shows vision a jump the wheels did not make. Counted in relocalizations_held().
   void confirm_odometry(bool confirmed) noexcept { odometry_confirmed_ = confirmed; }
+  /// Another sensor saw the odometry jump (VisualLocalization: a visual increment the EKF gated
+  /// out - the view moved in a way the wheels did not report: pushed, lifted, slipped): the next
+  /// update matches its scan over the wide window at once, before the scan is integrated where
+  /// it may not belong, instead of waiting for the matcher to grow suspicious (it may not: a
+  /// kidnapped robot's first scan can fit the map it is wrongly placed in, lab kidnap seed 2). The
+  /// wide match moves the pose only when it explains the scan clearly better than the
+  /// prediction, as always. Counted in relocalizations_asked().
+  void contradict_odometry() noexcept { relocalize_asked_ = true; }
   /// The map frame moved by D (loop closure): the correction moves with it, the reference map is dropped.
   void shift(const Pose2& D);
 
@@ -58,6 +66,8 @@ class PoseCorrector {
   [[nodiscard]] const Pose2& last_relocalization() const noexcept { return last_relocalization_; }
   /// Wide re-matches not tried because the odometry was confirmed (confirm_odometry).
   [[nodiscard]] std::size_t relocalizations_held() const noexcept { return relocalizations_held_; }
+  /// Wide re-matches tried because another sensor contradicted the odometry (contradict_odometry).
+  [[nodiscard]] std::size_t relocalizations_asked() const noexcept { return relocalizations_asked_; }
   /// The last relocalisation's mean scan score at the new pose and at the prediction, [0, 1].
   [[nodiscard]] std::pair<float, float> last_relocalization_scores() const noexcept { return last_relocalization_scores_; }
   [[nodiscard]] double time_s() const noexcept { return time_s_; }  ///< wall time spent [s]
@@ -81,8 +91,9 @@ class PoseCorrector {
   double pending_t_ = -1.0;
   std::size_t matches_ = 0, rejected_ = 0;
   unsigned suspect_ = 0;  ///< the last 8 updates, a bit each: match failed or sat at the window's edge
-  std::size_t relocalizations_ = 0, relocalizations_held_ = 0;
+  std::size_t relocalizations_ = 0, relocalizations_held_ = 0, relocalizations_asked_ = 0;
   bool odometry_confirmed_ = false;
+  bool relocalize_asked_ = false;
   Pose2 last_relocalization_;
   std::pair<float, float> last_relocalization_scores_{0.0f, 0.0f};
   double time_s_ = 0.0;

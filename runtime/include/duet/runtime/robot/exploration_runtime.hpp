@@ -75,6 +75,7 @@ struct RuntimeStats {
   std::uint64_t blind_holds = 0;         ///< control periods held still: no frame mapped for too long
   std::size_t relocalizations = 0;       ///< wide re-matches that moved the pose (pushed, slipped)
   std::size_t relocalizations_held = 0;  ///< wide re-matches not tried: vision confirmed the odometry
+  std::size_t relocalizations_asked = 0; ///< wide re-matches tried at once: vision gated out a jump the wheels did not make
   VisualLocalizationStats visual;        ///< visual odometry + EKF (all 0 when localization.visual_odometry is off)
   std::size_t visual_sets_incomplete = 0;  ///< sets vision skipped: a sensor's frame missing
   std::size_t visual_sets_busy = 0;        ///< kBackground: sets vision skipped, the front end still on the last one
@@ -197,6 +198,7 @@ class ExplorationRuntime {
   std::unique_ptr<VisualLocalization> visual_;  ///< localization.visual_odometry: wheels + vision, the odometry the rest sees
   std::optional<LocalizationHealth> health_;
   double last_visual_t_ = -1.0;  ///< stamp of the last set vision tracked
+  std::size_t visual_gated_seen_ = 0;  ///< vision's gated jumps already passed to the pose correction
   double last_now_s_ = 0.0;     ///< the last tick's time
   InputGuard guard_;
   ApproximateTimeCore sync_;

@@ -155,6 +155,7 @@ struct ExploreSummary {
   std::uint64_t blind_holds = 0;         ///< control periods held still with no frame mapped
   std::size_t relocalizations = 0;       ///< wide re-matches that moved the pose
   std::size_t relocalizations_held = 0;  ///< wide re-matches not tried: vision confirmed the odometry
+  std::size_t relocalizations_asked = 0; ///< wide re-matches tried at once: vision gated out a jump
   double occupied_on_obstacles = -1.0;   ///< share of the grid's occupied cells within 0.1 m of a true obstacle (-1: none occupied)
 };
 
