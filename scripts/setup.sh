@@ -13,6 +13,14 @@ pkgs=(build-essential cmake pkg-config
       libbenchmark-dev libgtest-dev libgmock-dev libyaml-cpp-dev libspdlog-dev libcli11-dev
       liblzf-dev nlohmann-json3-dev libpng-dev python3 python3-numpy python3-pytest
       libopen3d-dev)  # Open3D: the odometry benchmark's peer only
+# ROS 1 as Debian packages it (issue 22: the node, the simulator bridge, bag replay; roscore and
+# rosbag for their tests). rosbag's headers include pluginlib's, which need rcpputils' and
+# rcutils'. DUET_NO_ROS=1 leaves them out (cmake then builds no ROS part).
+if [ "${DUET_NO_ROS:-0}" != 1 ]; then
+  pkgs+=(libroscpp-dev librosbag-dev libtf2-ros-dev libmessage-filters-dev libsensor-msgs-dev libnav-msgs-dev
+         libgeometry-msgs-dev libvisualization-msgs-dev libstd-srvs-dev librcpputils-dev librcutils-dev
+         ros-core python3-rosbag rosbash)
+fi
 # DUET_EXTRA_PKGS: more packages a caller needs (scripts/fuzz.sh: clang and libFuzzer).
 read -r -a extra_pkgs <<< "${DUET_EXTRA_PKGS:-}"
 pkgs+=("${extra_pkgs[@]}")

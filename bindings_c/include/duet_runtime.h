@@ -108,6 +108,8 @@ typedef struct duet_runtime_sensor_info {
   float depth_units_per_m;    /* the profile's depth units (uint16 frames may use others) */
   float rate_hz;              /* the frame rate the runtime expects (runtime.sensor_rate_hz) */
   float T_robot_optical[16];  /* the sensor's mount: optical frame -> robot frame, column-major */
+  char name[64];              /* the profile's name of the sensor, NUL-terminated (truncated to 63 bytes;
+                               * the ROS node's topic namespace) */
 } duet_runtime_sensor_info;
 
 /* Number of RGB-D sensors of the profile (0 on error). Thread-safe. */

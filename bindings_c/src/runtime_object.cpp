@@ -2,6 +2,7 @@
 // it publishes, the events and the runtime's own thread.
 #include "runtime_object.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -42,6 +43,9 @@ duet_runtime_sensor_info sensor_info(const Profile& p, std::size_t i) {
   out.rate_hz = static_cast<float>(p.runtime.sensor_rate_hz);
   const Eigen::Matrix4f T = s.T_robot_optical().matrix();
   std::memcpy(out.T_robot_optical, T.data(), sizeof out.T_robot_optical);
+  const std::size_t n = std::min(s.name.size(), sizeof out.name - 1);
+  std::memcpy(out.name, s.name.data(), n);
+  out.name[n] = '\0';
   return out;
 }
 

@@ -207,7 +207,8 @@ class Cloud(_Handle):
 def _sensor_info(si):
     return {"width": si.width, "height": si.height, "fx": si.fx, "fy": si.fy, "cx": si.cx, "cy": si.cy,
             "depth_units_per_m": si.depth_units_per_m, "rate_hz": si.rate_hz,
-            "T_robot_optical": np.array(list(si.T_robot_optical), dtype=np.float32).reshape(4, 4).T}
+            "T_robot_optical": np.array(list(si.T_robot_optical), dtype=np.float32).reshape(4, 4).T,
+            "name": si.name.decode("utf-8", "replace")}
 
 
 class Runtime(_Handle):

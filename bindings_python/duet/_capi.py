@@ -7,7 +7,7 @@ TypeError instead of undefined behaviour.
 import ctypes
 import ctypes.util
 import os
-from ctypes import (POINTER, Structure, c_char_p, c_double, c_float, c_int, c_int8, c_size_t,
+from ctypes import (POINTER, Structure, c_char, c_char_p, c_double, c_float, c_int, c_int8, c_size_t,
                     c_uint8, c_uint16, c_uint64, c_void_p)
 
 # ---- structures ------------------------------------------------------------------------------
@@ -31,7 +31,7 @@ class RgbdImage(Structure):  # duet_rgbd_image
 class SensorInfo(Structure):  # duet_runtime_sensor_info
     _fields_ = [("width", c_int), ("height", c_int), ("fx", c_float), ("fy", c_float), ("cx", c_float),
                 ("cy", c_float), ("depth_units_per_m", c_float), ("rate_hz", c_float),
-                ("T_robot_optical", c_float * 16)]
+                ("T_robot_optical", c_float * 16), ("name", c_char * 64)]
 
 
 class RuntimeStatus(Structure):  # duet_runtime_status

@@ -1,4 +1,4 @@
-// `duet replay DIR`: maps a recording again - mapping and localisation on recorded input, no
+// `duet replay DIR` (or RUN.bag): maps a recording again - mapping and localisation on recorded input, no
 // robot to drive (runtime/io/recording.hpp, docs/recording.md). A duet recording (`duet explore
 // --record`, duet_runtime_record) runs through the same runtime as the run that recorded it and,
 // in lockstep, gives the same grid and cloud bit for bit; --poses vision turns the visual
@@ -22,7 +22,11 @@
 
 #include <tbb/task_arena.h>
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <unistd.h>
+#include <vector>
 #include <filesystem>
 
 namespace duet::app {
@@ -35,6 +39,8 @@ struct ReplayOptions {
   bool realtime = false;
   int threads = 0;
   bool quiet = false;
+  std::string profile = "dual";     ///< a bag's robot (a duet recording carries its own)
+  std::vector<std::string> sets;    ///< a bag's profile overrides
 };
 
 int replay_recording(const ReplayOptions& o) {
@@ -127,9 +133,41 @@ int replay_tum_vision(const ReplayOptions& o) {
   return rc;
 }
 
+// A ROS 1 bag is mapped by duet_ros_replay (ros/src/bag_replay.cpp), the ROS side's own binary:
+// the CLI never links ROS. It sits beside `duet` (installed) or in the build tree's ros/.
+int replay_bag(const ReplayOptions& o) {
+  if (o.poses == "vision" || o.poses == "groundtruth")
+    fail(ErrorCode::kInvalidArgument, "--poses " + o.poses + ": a bag is replayed with its odometry (set localization.visual_odometry.enabled=true "
+                                      "with --set to fuse vision)");
+  if (o.realtime) fail(ErrorCode::kInvalidArgument, "--realtime: a bag is mapped as fast as it can be");
+  std::error_code ec;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", ec);
+  std::filesystem::path tool;
+  for (const auto& c : {self.parent_path() / "duet_ros_replay", self.parent_path() / "ros" / "duet_ros_replay"})
+    if (!ec && std::filesystem::is_regular_file(c)) {
+      tool = c;
+      break;
+    }
+  if (tool.empty())
+    fail(ErrorCode::kUnsupported, o.input + ": a ROS bag, but this duet was built without ROS 1 (duet_ros_replay is not beside " +
+                                      (ec ? std::string("the duet binary") : self.string()) +
+                                      "; scripts/setup.sh installs Debian's ROS packages, then rebuild)");
+  std::vector<std::string> args{tool.string(), o.input, "-o", o.out, "--profile", o.profile};
+  for (const auto& s : o.sets) args.insert(args.end(), {"--set", s});
+  if (o.quiet) args.emplace_back("-q");
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  std::fflush(stdout);
+  std::fflush(stderr);
+  ::execv(tool.c_str(), argv.data());
+  fail(ErrorCode::kIo, tool.string() + ": cannot be run (" + std::strerror(errno) + ")");
+}
+
 int replay(const ReplayOptions& o) {
   const std::filesystem::path in(o.input);
   std::error_code ec;
+  if (std::filesystem::is_regular_file(in, ec) && in.extension() == ".bag") return replay_bag(o);
   if (std::filesystem::is_regular_file(in / "recording.yaml", ec)) {
     if (o.poses == "groundtruth")
       fail(ErrorCode::kInvalidArgument, "--poses groundtruth: a duet recording has no ground truth; replay it with its odometry "
@@ -149,15 +187,15 @@ int replay(const ReplayOptions& o) {
     }
     return replay_tum_vision(o);
   }
-  fail(ErrorCode::kIo, o.input + ": neither a duet recording (recording.yaml) nor a TUM RGB-D folder (rgb.txt, depth.txt)");
+  fail(ErrorCode::kIo, o.input + ": neither a duet recording (recording.yaml), a TUM RGB-D folder (rgb.txt, depth.txt) nor a ROS 1 bag (.bag)");
 }
 
 }  // namespace
 
 void add_replay_command(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<ReplayOptions>();
-  CLI::App* cmd = app.add_subcommand("replay", "Map a recording again: a duet recording (duet explore --record) or a TUM RGB-D folder");
-  cmd->add_option("input", o->input, "the recording's folder")->required();
+  CLI::App* cmd = app.add_subcommand("replay", "Map a recording again: a duet recording (duet explore --record), a TUM RGB-D folder or a ROS 1 bag");
+  cmd->add_option("input", o->input, "the recording's folder, or a .bag of the ROS node's topics")->required();
   cmd->add_option("-o,--out", o->out, "output folder")->capture_default_str();
   cmd->add_option("--poses", o->poses,
                    "auto (a duet recording: odometry; a TUM RGB-D folder: vision), odometry (as recorded), vision (visual odometry; "
@@ -167,6 +205,8 @@ void add_replay_command(CLI::App& app, int& exit_code) {
   cmd->add_flag("--realtime", o->realtime, "replay at the recorded rate (default: as fast as it can)");
   cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "no progress output");
+  cmd->add_option("--profile", o->profile, "a bag's robot profile (a built-in name or a YAML file)")->capture_default_str();
+  cmd->add_option("--set", o->sets, "a bag's profile override KEY=VALUE (repeatable)");
   cmd->callback([o, &exit_code] { exit_code = replay(*o); });
 }
 

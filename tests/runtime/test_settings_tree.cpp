@@ -227,3 +227,37 @@ TEST(SettingsTree, MappingRangesAreTheKernelsValidate) {
     EXPECT_EQ(error_of([&] { (void)duet::resolve_profile("dual", overlays); }), "") << ok;
   }
 }
+
+// A list's element is set by its 0-based index (the ROS node sets each sensor's mount from tf
+// this way); an index the list does not have is named, and the other elements are untouched.
+TEST(SettingsTree, AListElementIsSetByItsIndex) {
+  const std::string y = duet::to_yaml(duet::builtin_profile("dual"));
+  const duet::Profile base = duet::parse_profile(y, "dual.yaml");
+  const std::vector<duet::ProfileOverlay> mount{duet::set_overlay("sensors.1.extrinsics.xyz_m=[0.1, -0.2, 0.5]"),
+                                                duet::set_overlay("sensors.1.extrinsics.zyx_euler_deg=[-80, 5, 1]")};
+  const duet::Profile p = duet::parse_profile(y, "dual.yaml", mount);
+  ASSERT_EQ(p.sensors.size(), 2u);
+  EXPECT_EQ(p.sensors[1].extrinsics.xyz_m, Eigen::Vector3f(0.1f, -0.2f, 0.5f));
+  EXPECT_EQ(p.sensors[1].extrinsics.zyx_euler_deg, Eigen::Vector3f(-80.0f, 5.0f, 1.0f));
+  EXPECT_EQ(p.sensors[1].name, base.sensors[1].name);  // the element is overlaid, not replaced
+  EXPECT_EQ(p.sensors[1].intrinsics.width, base.sensors[1].intrinsics.width);
+  EXPECT_EQ(p.sensors[0].extrinsics.xyz_m, base.sensors[0].extrinsics.xyz_m);
+  for (const char* bad : {"sensors.2.rate_hz=15", "sensors.x.rate_hz=15", "sensors.-1.rate_hz=15"}) {
+    try {
+      const std::vector<duet::ProfileOverlay> o{duet::set_overlay(bad)};
+      (void)duet::parse_profile(y, "dual.yaml", o);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const duet::Error& e) {
+      EXPECT_NE(std::string(e.what()).find("list of 2 elements"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    }
+  }
+  // A value out of range inside an element is still named by the profile's checks.
+  try {
+    const std::vector<duet::ProfileOverlay> o{duet::set_overlay("sensors.0.extrinsics.xyz_m=[0, 0, 500]")};
+    (void)duet::parse_profile(y, "dual.yaml", o);
+    ADD_FAILURE() << "a mount 500 m up was accepted";
+  } catch (const duet::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("xyz_m"), std::string::npos) << e.what();
+  }
+}

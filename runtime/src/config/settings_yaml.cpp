@@ -225,6 +225,24 @@ void merge_overlay(YAML::Node base, const YAML::Node& overlay, Locator& loc, con
     YAML::Node target = base[key];
     if (target && target.IsMap() && value.IsMap()) {
       merge_overlay(target, value, loc, source);
+    } else if (target && target.IsSequence() && value.IsMap()) {
+      // A list's element by its 0-based index (`--set sensors.1.extrinsics.xyz_m=[0,0,0.5]`):
+      // the keys of `value` must be indices of the list; each element is overlaid as a mapping.
+      for (const auto& element : value) {
+        const std::string index = element.first.Scalar();
+        const bool digits = !index.empty() && index.size() <= 6 && index.find_first_not_of("0123456789") == std::string::npos;
+        const std::size_t i = digits ? std::stoul(index) : 0;
+        if (!digits || i >= target.size())
+          fail(ErrorCode::kInvalidArgument, source + ": '" + key + "' is a list of " + std::to_string(target.size()) +
+                                                " elements; '" + index + "' is not one of its indices (0-based)");
+        YAML::Node item = target[i];
+        if (item.IsMap() && element.second.IsMap()) {
+          merge_overlay(item, element.second, loc, source);
+        } else {
+          loc.add_overlay(element.second, source);
+          target[i] = element.second;
+        }
+      }
     } else {
       loc.add_overlay(value, source);
       base[key] = value;

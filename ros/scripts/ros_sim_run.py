@@ -1,0 +1,151 @@
+#!/usr/bin/env python3
+"""Runs duet through ROS topics only: roscore on loopback (its own port), use_sim_time, the
+simulator bridge (duet_sim_ros) and the node (duet_ros), optionally `rosbag record` of the node's
+input topics. Writes OUT/sim.json (the bridge: coverage, collisions), OUT/maps/ (the node's saved
+maps and summary.json with its "ros" block) and OUT/run.json (both, plus exit codes), and prints
+one line. Used by the ROS tests (tests/ros/) and the README's ROS section.
+
+  ros/scripts/ros_sim_run.py --out out/ros1 --seed 1 --time 60 --sensor-rate 5
+  ros/scripts/ros_sim_run.py --out out/ros1 --time 900 --exit-when-done --record out/ros1/run.bag
+"""
+import argparse
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+import xmlrpc.client
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+
+
+def free_port():
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
+
+
+def wait_master(uri, timeout=30.0):
+    end = time.time() + timeout
+    master = xmlrpc.client.ServerProxy(uri)
+    while time.time() < end:
+        try:
+            code, _, _ = master.getSystemState("/ros_sim_run")
+            if code == 1:
+                return master
+        except OSError:
+            pass
+        time.sleep(0.2)
+    raise RuntimeError("roscore did not come up at " + uri)
+
+
+def stop(proc, sig=signal.SIGINT, wait=20.0):
+    if proc is None or proc.poll() is not None:
+        return proc.returncode if proc else None
+    try:
+        os.killpg(proc.pid, sig)
+    except ProcessLookupError:
+        return proc.returncode
+    try:
+        return proc.wait(wait)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        return proc.wait()
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", required=True)
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap.add_argument("--world", default="lab")
+    ap.add_argument("--profile", default="dual")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--time", type=float, default=60.0, help="simulated seconds the node runs (then it saves and exits)")
+    ap.add_argument("--sensor-rate", type=float, default=30.0, help="frames per second per camera (a Kinect: 30)")
+    ap.add_argument("--speed", type=float, default=1.0, help="simulated seconds per wall second")
+    ap.add_argument("--exit-when-done", action="store_true", help="the node saves and exits once the explorer is done")
+    ap.add_argument("--record", help="rosbag record the node's input topics into this .bag")
+    ap.add_argument("--interrupt-at", type=float, help="send the node SIGINT after this many wall seconds")
+    ap.add_argument("--bridge", action="append", default=[], help="extra bridge parameter NAME:=VALUE")
+    ap.add_argument("--node", action="append", default=[], help="extra node parameter NAME:=VALUE")
+    ap.add_argument("--node-set", action="append", default=[], help="profile override KEY=VALUE for the node")
+    ap.add_argument("--sensors", default="kinect_front,kinect_right", help="the profile's sensor names (for --record)")
+    a = ap.parse_args()
+
+    out = os.path.abspath(a.out)
+    os.makedirs(out, exist_ok=True)
+    port = free_port()
+    env = dict(os.environ)
+    env.update(ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOSTNAME="127.0.0.1", ROS_IP="127.0.0.1",
+               ROS_HOME=os.path.join(out, "ros_home"), ROS_LOG_DIR=os.path.join(out, "ros_log"))
+    logs = {}
+
+    def start(name, cmd):
+        logs[name] = open(os.path.join(out, name + ".log"), "w")
+        return subprocess.Popen(cmd, env=env, stdout=logs[name], stderr=subprocess.STDOUT, start_new_session=True)
+
+    core = bridge = node = bag = None
+    result = {"port": port}
+    try:
+        core = start("roscore", ["roscore", "-p", str(port)])
+        master = wait_master(env["ROS_MASTER_URI"])
+        master.setParam("/ros_sim_run", "/use_sim_time", True)
+        sets = ["runtime.sensor_rate_hz=%g" % a.sensor_rate] + a.node_set
+        if a.record:
+            topics = ["/odom"]
+            for s in a.sensors.split(","):
+                topics += ["/%s/depth_registered/image_raw" % s, "/%s/rgb/image_rect_color" % s, "/%s/rgb/camera_info" % s]
+            bag = start("rosbag", ["rosbag", "record", "--lz4", "--tcpnodelay", "-O", os.path.abspath(a.record)] + topics)
+            time.sleep(2.0)  # rosbag subscribes before the simulation starts
+        node = start("node", [os.path.join(a.build, "ros", "duet_ros"), "_profile:=" + a.profile, "_seed:=%d" % a.seed,
+                              "_output_dir:=" + os.path.join(out, "maps"), "_max_time:=%g" % a.time, "_set:=" + ";".join(sets),
+                              "_exit_when_done:=%s" % ("true" if a.exit_when_done else "false")] + ["_" + p for p in a.node])
+        time.sleep(1.0)
+        bridge = start("bridge", [os.path.join(a.build, "ros", "duet_sim_ros"), "_world:=" + a.world, "_profile:=" + a.profile,
+                                  "_seed:=%d" % a.seed, "_sensor_rate:=%g" % a.sensor_rate, "_speed:=%g" % a.speed,
+                                  "_max_time:=%g" % (a.time + 3.0), "_summary:=" + os.path.join(out, "sim.json")] + ["_" + p for p in a.bridge])
+        wall0 = time.time()
+        limit = (a.time / a.speed if a.speed > 0 else a.time) * 2.0 + 60.0
+        interrupted = False
+        while node.poll() is None and time.time() - wall0 < limit:
+            if a.interrupt_at is not None and not interrupted and time.time() - wall0 >= a.interrupt_at:
+                os.killpg(node.pid, signal.SIGINT)
+                interrupted = True
+            if bridge.poll() is not None and bridge.returncode != 0:
+                break
+            time.sleep(0.2)
+        result["node_exit"] = node.wait(30.0) if node.poll() is None and interrupted else node.poll()
+        if result["node_exit"] is None:
+            result["node_exit"] = stop(node)
+            result["node_timed_out"] = True
+        result["bridge_exit"] = stop(bridge)
+        result["wall_s"] = time.time() - wall0
+    finally:
+        stop(bag)
+        stop(node)
+        stop(bridge)
+        stop(core, signal.SIGINT)
+        for f in logs.values():
+            f.close()
+    for name, path in (("sim", os.path.join(out, "sim.json")), ("node", os.path.join(out, "maps", "summary.json"))):
+        try:
+            with open(path) as f:
+                result[name] = json.load(f)
+        except (OSError, ValueError) as e:
+            result[name] = {"error": str(e)}
+    with open(os.path.join(out, "run.json"), "w") as f:
+        json.dump(result, f, indent=1)
+    sim, ros = result["sim"], result["node"].get("ros", {})
+    print("ros_sim_run: node exit %s, bridge exit %s; t = %.1f s, coverage %.1f %%, %s collisions; topic->command p99 %.2f ms; %s"
+          % (result.get("node_exit"), result.get("bridge_exit"), sim.get("sim_time_s", -1), 100.0 * sim.get("coverage", -1),
+             sim.get("collisions", "?"), ros.get("topic_to_command", {}).get("p99_ms", -1), out))
+    return 0 if result.get("node_exit") == 0 and result.get("bridge_exit") == 0 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
