@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Sets everything up (Debian packages, build) and runs the test suite three times:
-#   1. Release build            (build/),       ctest
+#   1. Release build            (build/),       ctest (with the ROS node end to end through roscore)
 #   2. AddressSanitizer + UBSan (build-asan/),  ctest
 #   3. ThreadSanitizer          (build-tsan/),  the tests of everything that runs threads of its
 #      own: the runtime's background mode and its worker, the clocks, the push queues, the C API's runtime with
-#      its own thread and pushes from three threads. They run their TBB work in
+#      its own thread and pushes from three threads, the ROS node (its control and publishing threads,
+#      against the Release build's simulator bridge through roscore). They run their TBB work in
 #      one-thread arenas: Debian's TBB is not instrumented, so TSan cannot see TBB's own
 #      synchronisation (its parallel loops would show as races).
 #   4. Fuzzing                  (build-fuzz/),  every libFuzzer target (clang, ASan + UBSan +
@@ -33,9 +34,13 @@ if [ "${DUET_SKIP_SANITIZERS:-0}" != 1 ]; then
 
   echo "== duet: ThreadSanitizer build and the threaded tests"
   export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$here/tests/tsan.supp"
-  DUET_BUILD_TYPE=RelWithDebInfo DUET_BUILD_TARGETS="test_threads test_capi_threads" \
-    "$here/scripts/setup.sh" "$here/build-tsan" "$shards" -DDUET_SANITIZE_THREAD=ON -DDUET_BUILD_BENCH=OFF
-  (cd "$here/build-tsan" && ctest --output-on-failure -j "$jobs" --timeout 1800 -L '^test_(threads|capi_threads)$')
+  tsan_targets="test_threads test_capi_threads" tsan_labels='test_threads|test_capi_threads' tsan_args=()
+  if [ -x "$here/build/ros/duet_sim_ros" ]; then  # the ROS node's own threads, against the Release bridge
+    tsan_targets+=" duet_ros" tsan_labels+='|ros_node_threads' tsan_args=(-DDUET_ROS_SIM_BRIDGE="$here/build/ros/duet_sim_ros")
+  fi
+  DUET_BUILD_TYPE=RelWithDebInfo DUET_BUILD_TARGETS="$tsan_targets" \
+    "$here/scripts/setup.sh" "$here/build-tsan" "$shards" -DDUET_SANITIZE_THREAD=ON -DDUET_BUILD_BENCH=OFF "${tsan_args[@]}"
+  (cd "$here/build-tsan" && ctest --output-on-failure -j "$jobs" --timeout 1800 -L "^($tsan_labels)\$")
 
   echo "== duet: fuzzing, ${DUET_FUZZ_SECONDS:-20} s per target"
   FUZZ_SEED=1 FUZZ_BUILD="$here/build-fuzz" "$here/scripts/fuzz.sh" "${DUET_FUZZ_SECONDS:-20}"

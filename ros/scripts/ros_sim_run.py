@@ -66,11 +66,14 @@ def main():
     ap.add_argument("--profile", default="dual")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--time", type=float, default=60.0, help="simulated seconds the node runs (then it saves and exits)")
-    ap.add_argument("--sensor-rate", type=float, default=30.0, help="frames per second per camera (a Kinect: 30)")
+    ap.add_argument("--sensor-rate", type=float, default=10.0, help="frames per second per camera (a Kinect: 30; sim.launch: 10)")
     ap.add_argument("--speed", type=float, default=1.0, help="simulated seconds per wall second")
     ap.add_argument("--exit-when-done", action="store_true", help="the node saves and exits once the explorer is done")
     ap.add_argument("--record", help="rosbag record the node's input topics into this .bag")
     ap.add_argument("--interrupt-at", type=float, help="send the node SIGINT after this many wall seconds")
+    ap.add_argument("--call-save-at", type=float, action="append", default=[],
+                    help="call the node's ~save service after this many wall seconds (repeatable)")
+    ap.add_argument("--bridge-bin", help="the duet_sim_ros to run (default: BUILD/ros/duet_sim_ros)")
     ap.add_argument("--bridge", action="append", default=[], help="extra bridge parameter NAME:=VALUE")
     ap.add_argument("--node", action="append", default=[], help="extra node parameter NAME:=VALUE")
     ap.add_argument("--node-set", action="append", default=[], help="profile override KEY=VALUE for the node")
@@ -106,16 +109,22 @@ def main():
                               "_output_dir:=" + os.path.join(out, "maps"), "_max_time:=%g" % a.time, "_set:=" + ";".join(sets),
                               "_exit_when_done:=%s" % ("true" if a.exit_when_done else "false")] + ["_" + p for p in a.node])
         time.sleep(1.0)
-        bridge = start("bridge", [os.path.join(a.build, "ros", "duet_sim_ros"), "_world:=" + a.world, "_profile:=" + a.profile,
+        bridge = start("bridge", [a.bridge_bin or os.path.join(a.build, "ros", "duet_sim_ros"), "_world:=" + a.world, "_profile:=" + a.profile,
                                   "_seed:=%d" % a.seed, "_sensor_rate:=%g" % a.sensor_rate, "_speed:=%g" % a.speed,
                                   "_max_time:=%g" % (a.time + 3.0), "_summary:=" + os.path.join(out, "sim.json")] + ["_" + p for p in a.bridge])
         wall0 = time.time()
         limit = (a.time / a.speed if a.speed > 0 else a.time) * 2.0 + 60.0
         interrupted = False
+        saves = sorted(a.call_save_at)
+        result["save_calls"] = []
         while node.poll() is None and time.time() - wall0 < limit:
             if a.interrupt_at is not None and not interrupted and time.time() - wall0 >= a.interrupt_at:
                 os.killpg(node.pid, signal.SIGINT)
                 interrupted = True
+            if saves and time.time() - wall0 >= saves[0]:
+                saves.pop(0)
+                call = subprocess.run(["rosservice", "call", "/duet/save"], env=env, capture_output=True, text=True, timeout=60)
+                result["save_calls"].append({"exit": call.returncode, "output": (call.stdout + call.stderr).strip()})
             if bridge.poll() is not None and bridge.returncode != 0:
                 break
             time.sleep(0.2)

@@ -477,9 +477,12 @@ bool DuetNode::save(const std::string& dir, std::string& message) {
   nlohmann::json sensors = nlohmann::json::array();
   for (std::size_t i = 0; i < io_.size(); ++i) {
     SensorIo& io = *io_[i];
+    // Not under io.mutex: FrameSync holds its own lock while it calls on_pair, which takes io.mutex
+    // (the other order deadlocked a save against an arriving frame).
+    const std::uint64_t pairs = sync_->pairs(i);
     std::lock_guard lock(io.mutex);
     sensors.push_back({{"name", sensor_names_[i]}, {"depth_received", io.depth_received}, {"color_received", io.color_received},
-                       {"camera_info_received", io.info_received}, {"pairs", sync_->pairs(i)}, {"pushed", io.pushed},
+                       {"camera_info_received", io.info_received}, {"pairs", pairs}, {"pushed", io.pushed},
                        {"dropped_malformed", io.dropped}, {"last_drop", io.last_drop}});
   }
   ros_block["sensors"] = sensors;

@@ -46,6 +46,8 @@ BridgeOptions read_bridge_options(const ros::NodeHandle& pnh) {
   o.sensor_rate_hz = param<double>(pnh, "sensor_rate", o.sensor_rate_hz);
   require(o.sensor_rate_hz > 0.0 && o.sensor_rate_hz <= 60.0, "~sensor_rate: outside (0, 60] Hz");
   o.speed = param<double>(pnh, "speed", o.speed);
+  o.threads = param<int>(pnh, "threads", o.threads);
+  require(o.threads >= 0 && o.threads <= 256, "~threads: outside [0, 256]");
   require(o.speed >= 0.0 && o.speed <= 100.0, "~speed: outside [0, 100]");
   o.step_s = param<double>(pnh, "step", o.step_s);
   require(o.step_s >= 0.001 && o.step_s <= 0.1, "~step: outside [0.001, 0.1] s");
@@ -71,7 +73,7 @@ SimBridge::SimBridge(ros::NodeHandle& nh, ros::NodeHandle& pnh, BridgeOptions op
     const std::filesystem::path parent = std::filesystem::path(o_.summary).parent_path();
     duet::prepare_output_dir(parent.empty() ? std::filesystem::path(".") : parent);
   }
-  device_ = duet_device_new("threads=1");
+  device_ = duet_device_new(("threads=" + std::to_string(o_.threads)).c_str());
   if (!device_) throw std::runtime_error("duet_sim_ros: no duet device");
   std::vector<std::string> sets = o_.sets;
   std::ostringstream rate;
@@ -359,7 +361,7 @@ int SimBridge::run(const std::atomic<int>& stop_flag) {
          {"odometry_published", odometry_published_}, {"commands_received", cmds_received_}, {"maps_received", maps_received_},
          {"faults", {{"frames_withheld", frames_withheld_}, {"malformed_published", malformed_published_},
                      {"odometry_disordered", disordered_published_}}},
-         {"sensor_rate_hz", o_.sensor_rate_hz}, {"speed", o_.speed}, {"curve", curve}};
+         {"sensor_rate_hz", o_.sensor_rate_hz}, {"speed", o_.speed}, {"threads", o_.threads}, {"curve", curve}};
   }
   try {
     duet::write_text_file(o_.summary, s.dump(2) + "\n");

@@ -45,6 +45,7 @@ struct BridgeOptions {
   std::uint64_t seed = 1;               ///< ~seed: the wheel and depth noise
   double sensor_rate_hz = 30.0;         ///< ~sensor_rate: frames per second per sensor, (0, 60] (a Kinect: 30)
   double speed = 1.0;                   ///< ~speed: simulated seconds per wall second; 0 = as fast as it goes
+  int threads = 1;                      ///< ~threads: rendering threads (0: all cores); the node needs the rest
   double step_s = 0.01;                 ///< ~step: simulation step and /clock period [s], [0.001, 0.1]
   double max_time_s = 0.0;              ///< ~max_time: stop after this simulated time [s] (0: never)
   double cmd_timeout_s = 0.5;           ///< ~cmd_timeout [s]
