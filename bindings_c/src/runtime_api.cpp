@@ -395,7 +395,7 @@ DUET_API duet_cloud duet_runtime_get_cloud(duet_runtime runtime) {
     {
       std::lock_guard lock(r.run);
       r.drain_locked();
-      if (r.rt) obj->cloud = r.rt->mapper().cloud();
+      if (r.rt) in_arena(*r.device, [&] { obj->cloud = r.rt->mapper().cloud(); });  // the device's threads
     }
     obj->parent = r.device->key;
     result = to_handle<duet_cloud>(register_object(std::move(obj)));
@@ -465,7 +465,7 @@ DUET_API void duet_runtime_save(duet_runtime runtime, const char* dir) {
         {"odometry_queue_overflow", static_cast<double>(ps.odometry_overflowed)},
         {"odometry_paused", static_cast<double>(r.paused_odometry.load())}};
     if (!r.rt) api_fail(DUET_ERROR_INVALID_OPERATION, "the runtime has not run a control period yet: nothing to save");
-    duet::write_runtime_outputs(*r.rt, r.trajectory, out, push);
+    in_arena(*r.device, [&] { duet::write_runtime_outputs(*r.rt, r.trajectory, out, push); });  // the device's threads
   });
 }
 

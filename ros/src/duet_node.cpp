@@ -102,6 +102,8 @@ NodeOptions read_options(const ros::NodeHandle& pnh) {
   o.save_on_exit = param<bool>(pnh, "save_on_exit", o.save_on_exit);
   o.exit_when_done = param<bool>(pnh, "exit_when_done", o.exit_when_done);
   o.max_time_s = param<double>(pnh, "max_time", o.max_time_s);
+  o.threads = param<int>(pnh, "threads", o.threads);
+  require(o.threads >= 0 && o.threads <= 256, "~threads: outside [0, 256]");
   o.mounts_from_tf = param<bool>(pnh, "mounts_from_tf", o.mounts_from_tf);
   o.base_frame = param<std::string>(pnh, "base_frame", o.base_frame);
   require(!o.base_frame.empty(), "~base_frame: empty");
@@ -122,7 +124,7 @@ struct DuetNode::SensorIo {
 
 DuetNode::DuetNode(ros::NodeHandle& nh, ros::NodeHandle& pnh, NodeOptions options) : o_(std::move(options)), nh_(nh), pnh_(pnh) {
   duet::prepare_output_dir(o_.output_dir);  // a folder the maps cannot be saved in is an error now, not after the run
-  device_ = duet_device_new("threads=0");
+  device_ = duet_device_new(("threads=" + std::to_string(o_.threads)).c_str());
   if (device_ == nullptr) throw std::runtime_error(std::string("duet: no device: ") + duet_device_get_error_message(nullptr));
   duet_device_set_error_callback(device_, &DuetNode::on_error, this);
   std::vector<std::string> sets = o_.sets;

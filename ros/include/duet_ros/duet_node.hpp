@@ -63,6 +63,7 @@ struct NodeOptions {
   bool save_on_exit = true;            ///< ~save_on_exit
   bool exit_when_done = false;         ///< ~exit_when_done: save and exit once the explorer is done
   double max_time_s = 0.0;             ///< ~max_time: save and exit after this much ROS time [s] (0: never)
+  int threads = 0;                     ///< ~threads: duet's worker threads (0: all cores)
   bool mounts_from_tf = false;         ///< ~mounts_from_tf: the sensors' mounts from tf (base_frame <- each
                                        ///< depth image's frame_id) instead of the profile's extrinsics
   std::string base_frame = "base_link";///< ~base_frame: the robot frame of the mounts
