@@ -387,8 +387,11 @@ void DuetNode::tick(double now_s, bool by_odometry, double odom_wall_s) {
     if (last_tick_start_ >= 0.0) control_period_.add(start - last_tick_start_);
   }
   last_tick_start_ = start;
-  if (seen && std::isfinite(st.pose.x))
+  // One map -> odom per stamp: tf2 warns of (and drops) a second one with the same time.
+  if (seen && std::isfinite(st.pose.x) && now_s > last_tf_s_) {
     tf_.sendTransform(map_to_odom(st.pose, odom, o_.map_frame, o_.odom_frame, ros::Time(now_s + o_.transform_tolerance_s)));
+    last_tf_s_ = now_s;
+  }
   if (st.state == DUET_EXPLORER_DONE) done_ = true;
 }
 

@@ -127,6 +127,7 @@ class DuetNode {
   std::condition_variable odom_cv_;
 
   double last_tick_start_ = -1.0;     ///< the control thread's: wall time the last period started
+  double last_tf_s_ = -1.0;          ///< the control thread's: the ROS time of the last map -> odom sent
 
   std::atomic<bool> running_{true};
   std::atomic<bool> done_{false};
