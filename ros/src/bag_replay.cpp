@@ -1,5 +1,6 @@
 #include <duet_ros/bag_replay.hpp>
 #include <duet_ros/image_view.hpp>
+#include <duet_ros/map_messages.hpp>
 
 #include <duet.h>
 #include <duet/runtime/io/output.hpp>
@@ -11,7 +12,6 @@
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
 #include <sensor_msgs/Imu.h>
-#include <tf2/utils.h>
 
 #include <algorithm>
 #include <cmath>
@@ -169,10 +169,7 @@ BagReplayResult replay_bag(const BagReplayOptions& o) {
         auto od = m.instantiate<nav_msgs::Odometry>();
         if (!od) wrong_type(m, "nav_msgs/Odometry");
         if (od) {
-          const duet_pose2 p{static_cast<float>(od->pose.pose.position.x), static_cast<float>(od->pose.pose.position.y),
-                             static_cast<float>(tf2::getYaw(od->pose.pose.orientation))};
-          duet_runtime_push_odometry(h.rt, od->header.stamp.toSec(), p,
-                                     duet_twist{static_cast<float>(od->twist.twist.linear.x), static_cast<float>(od->twist.twist.angular.z)});
+          duet_runtime_push_odometry(h.rt, od->header.stamp.toSec(), planar_pose(*od), planar_twist(*od));
           ++res.odometry;
         }
         continue;

@@ -10,7 +10,6 @@
 #include <nlohmann/json.hpp>
 #include <std_msgs/String.h>
 #include <ros/topic.h>
-#include <tf2/utils.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
 
@@ -54,11 +53,6 @@ void flatten(const XmlRpc::XmlRpcValue& v, const std::string& prefix, std::vecto
     return;
   }
   out.push_back(prefix + "=" + yaml_value(v, prefix));
-}
-
-duet_pose2 planar(const nav_msgs::Odometry& m) {
-  return duet_pose2{static_cast<float>(m.pose.pose.position.x), static_cast<float>(m.pose.pose.position.y),
-                    static_cast<float>(tf2::getYaw(m.pose.pose.orientation))};
 }
 
 nlohmann::json latency_json(const duet::LatencyStats& l) {
@@ -314,9 +308,8 @@ void DuetNode::on_pair(std::size_t sensor, const sensor_msgs::ImageConstPtr& dep
 
 void DuetNode::on_odometry(const nav_msgs::OdometryConstPtr& msg) {
   const double arrived = wall_now();
-  const duet_pose2 pose = planar(*msg);
-  const duet_twist twist{static_cast<float>(msg->twist.twist.linear.x), static_cast<float>(msg->twist.twist.angular.z)};
-  duet_runtime_push_odometry(rt_, msg->header.stamp.toSec(), pose, twist);  // bad values: counted drops in the runtime
+  const duet_pose2 pose = planar_pose(*msg);
+  duet_runtime_push_odometry(rt_, msg->header.stamp.toSec(), pose, planar_twist(*msg));  // bad values: counted drops in the runtime
   {
     std::lock_guard lock(mutex_);
     ++odometry_received_;

@@ -1,5 +1,7 @@
 #include <duet_ros/map_messages.hpp>
 
+#include <tf2/utils.h>
+
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -8,13 +10,6 @@
 
 namespace duet_ros {
 namespace {
-
-geometry_msgs::Quaternion yaw_quaternion(double yaw) {
-  geometry_msgs::Quaternion q;
-  q.w = std::cos(yaw / 2.0);
-  q.z = std::sin(yaw / 2.0);
-  return q;
-}
 
 bool is_frontier(const nav_msgs::OccupancyGrid& m, int x, int y) {
   const int w = static_cast<int>(m.info.width), h = static_cast<int>(m.info.height);
@@ -28,6 +23,22 @@ bool is_frontier(const nav_msgs::OccupancyGrid& m, int x, int y) {
 }
 
 }  // namespace
+
+geometry_msgs::Quaternion yaw_quaternion(double yaw) {
+  geometry_msgs::Quaternion q;
+  q.w = std::cos(yaw / 2.0);
+  q.z = std::sin(yaw / 2.0);
+  return q;
+}
+
+duet_pose2 planar_pose(const nav_msgs::Odometry& m) {
+  return duet_pose2{static_cast<float>(m.pose.pose.position.x), static_cast<float>(m.pose.pose.position.y),
+                    static_cast<float>(tf2::getYaw(m.pose.pose.orientation))};
+}
+
+duet_twist planar_twist(const nav_msgs::Odometry& m) {
+  return duet_twist{static_cast<float>(m.twist.twist.linear.x), static_cast<float>(m.twist.twist.angular.z)};
+}
 
 nav_msgs::OccupancyGrid to_occupancy_grid(duet_grid grid, const std::string& frame, const ros::Time& stamp) {
   nav_msgs::OccupancyGrid m;

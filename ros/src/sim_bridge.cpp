@@ -24,13 +24,6 @@
 namespace duet_ros {
 namespace {
 
-geometry_msgs::Quaternion yaw_q(double yaw) {
-  geometry_msgs::Quaternion q;
-  q.w = std::cos(yaw / 2.0);
-  q.z = std::sin(yaw / 2.0);
-  return q;
-}
-
 double wall_now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 }  // namespace
@@ -239,7 +232,7 @@ void SimBridge::publish_odometry() {
       m.child_frame_id = o_.base_frame;
       m.pose.pose.position.x = poses[j].x;
       m.pose.pose.position.y = poses[j].y;
-      m.pose.pose.orientation = yaw_q(poses[j].theta);
+      m.pose.pose.orientation = yaw_quaternion(poses[j].theta);
       m.twist.twist.linear.x = twists[j].v;
       m.twist.twist.angular.z = twists[j].omega;
       odom_pub_.publish(m);
@@ -332,7 +325,7 @@ int SimBridge::run(const std::atomic<int>& stop_flag) {
     truth.child_frame_id = o_.base_frame;
     truth.pose.pose.position.x = p.x;
     truth.pose.pose.position.y = p.y;
-    truth.pose.pose.orientation = yaw_q(p.theta);
+    truth.pose.pose.orientation = yaw_quaternion(p.theta);
     truth_pub_.publish(truth);
     if (t >= next_score) {
       const auto [coverage, area] = score();

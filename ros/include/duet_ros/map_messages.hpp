@@ -10,6 +10,7 @@
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <nav_msgs/OccupancyGrid.h>
+#include <nav_msgs/Odometry.h>
 #include <nav_msgs/Path.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <visualization_msgs/MarkerArray.h>
@@ -25,6 +26,12 @@ namespace duet_ros {
 [[nodiscard]] sensor_msgs::PointCloud2 to_point_cloud2(duet_cloud cloud, const std::string& frame, const ros::Time& stamp);
 /// x, y pairs (map frame) as a path; every pose's heading points to the next point.
 [[nodiscard]] nav_msgs::Path to_path(const std::vector<float>& xy, const std::string& frame, const ros::Time& stamp);
+/// A heading [rad] as a quaternion about z.
+[[nodiscard]] geometry_msgs::Quaternion yaw_quaternion(double yaw);
+/// An odometry message's planar pose (x, y, yaw) and twist (forward speed, yaw rate), as pushed
+/// to duet_runtime_push_odometry().
+[[nodiscard]] duet_pose2 planar_pose(const nav_msgs::Odometry& m);
+[[nodiscard]] duet_twist planar_twist(const nav_msgs::Odometry& m);
 /// A planar pose as a PoseStamped.
 [[nodiscard]] geometry_msgs::PoseStamped to_pose_stamped(const duet_pose2& p, const std::string& frame, const ros::Time& stamp);
 /// map -> odom such that map_from_odom * odom_from_base = map_from_base (both planar).
