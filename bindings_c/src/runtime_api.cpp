@@ -7,6 +7,7 @@
 #include <duet/runtime/io/runtime_outputs.hpp>
 
 #include <map>
+#include <optional>
 
 #include <chrono>
 #include <cmath>
@@ -392,11 +393,9 @@ DUET_API duet_cloud duet_runtime_get_cloud(duet_runtime runtime) {
   duet_cloud result = nullptr;
   with_runtime(runtime, "duet_runtime_get_cloud", [&](Runtime& r) {
     auto obj = std::make_shared<Cloud>(r.device);
-    {
-      std::lock_guard lock(r.run);
-      r.drain_locked();
-      if (r.rt) in_arena(*r.device, [&] { obj->cloud = r.rt->mapper().cloud(); });  // the device's threads
-    }
+    r.read_drained([&](duet::ExplorationRuntime& rt) {
+      in_arena(*r.device, [&] { obj->cloud = rt.mapper().cloud(); });  // the device's threads
+    });
     obj->parent = r.device->key;
     result = to_handle<duet_cloud>(register_object(std::move(obj)));
   });
@@ -454,18 +453,24 @@ DUET_API void duet_runtime_save(duet_runtime runtime, const char* dir) {
     check_not_null(dir, "dir");
     const std::filesystem::path out(dir);
     duet::prepare_output_dir(out);
-    std::lock_guard lock(r.run);
-    r.drain_locked();
-    const duet::PushStats ps = r.robot.stats();
-    const std::map<std::string, double> push{
-        {"frames_pushed", static_cast<double>(ps.frames_pushed)},
-        {"frames_queue_overflow", static_cast<double>(ps.frames_overflowed)},
-        {"frames_paused", static_cast<double>(r.paused_frames.load())},
-        {"odometry_pushed", static_cast<double>(ps.odometry_pushed)},
-        {"odometry_queue_overflow", static_cast<double>(ps.odometry_overflowed)},
-        {"odometry_paused", static_cast<double>(r.paused_odometry.load())}};
-    if (!r.rt) api_fail(DUET_ERROR_INVALID_OPERATION, "the runtime has not run a control period yet: nothing to save");
-    in_arena(*r.device, [&] { duet::write_runtime_outputs(*r.rt, r.trajectory, out, push); });  // the device's threads
+    // Copied while the run lock is held (after the map update in flight is done, waited for
+    // without the lock), written after it: a save holds control for the copy only.
+    std::optional<duet::RuntimeOutputs> snapshot;
+    r.read_drained([&](duet::ExplorationRuntime& rt) {
+      const duet::PushStats ps = r.robot.stats();
+      const std::map<std::string, double> push{
+          {"frames_pushed", static_cast<double>(ps.frames_pushed)},
+          {"frames_queue_overflow", static_cast<double>(ps.frames_overflowed)},
+          {"frames_paused", static_cast<double>(r.paused_frames.load())},
+          {"odometry_pushed", static_cast<double>(ps.odometry_pushed)},
+          {"odometry_queue_overflow", static_cast<double>(ps.odometry_overflowed)},
+          {"odometry_paused", static_cast<double>(r.paused_odometry.load())}};
+      in_arena(*r.device, [&] { snapshot = duet::snapshot_runtime_outputs(rt, r.trajectory, push); });  // the device's threads
+    });
+    if (!snapshot) api_fail(DUET_ERROR_INVALID_OPERATION, "the runtime has not run a control period yet: nothing to save");
+    // Serial file writing, on the caller's thread and outside the device's arena: in the arena a
+    // device of one thread would hold the control thread's tick until the files are written.
+    duet::write_runtime_outputs(*snapshot, out);
   });
 }
 

@@ -86,6 +86,13 @@ struct Runtime final : Object {
   void tick_locked(double now, std::vector<std::pair<double, std::string>>& events);
   /// Waits for the background tasks (lock `run` held).
   void drain_locked();
+  /// Runs read(ExplorationRuntime&) on a drained runtime (lock `run` held for the read only):
+  /// map updates held, their tasks waited for with the lock released - the control thread
+  /// ticks on meanwhile - then the lock taken, the runtime drained (the decision or visual task
+  /// still running, if any) and read. read is not called before the first control period.
+  /// Takes `run` itself: call without it.
+  template <class F>
+  void read_drained(F&& read);
 
   // ---- published (lock `pub`)
   mutable std::mutex pub;
@@ -116,5 +123,27 @@ struct Runtime final : Object {
 };
 
 template <> struct KindOf<Runtime> { static constexpr Kind value = Kind::kRuntime; };
+
+template <class F>
+void Runtime::read_drained(F&& read) {
+  duet::ExplorationRuntime* rt_seen = nullptr;
+  {
+    std::lock_guard lock(run);
+    rt_seen = rt.get();
+    if (rt_seen) rt_seen->hold_map_updates(true);
+  }
+  if (!rt_seen) return;
+  struct Release {
+    Runtime& r;
+    ~Release() {
+      std::lock_guard lock(r.run);
+      r.rt->hold_map_updates(false);
+    }
+  } release{*this};
+  rt_seen->wait_background_idle();  // without the lock: control goes on
+  std::lock_guard lock(run);
+  drain_locked();
+  read(*rt);
+}
 
 }  // namespace duet::capi

@@ -175,6 +175,30 @@ TEST(PoseEkf, VisionCorrectsABiasedWheelAndTheGateRejectsAJump) {
   EXPECT_NEAR(fused.wheel_bias(), 0.02, 0.005);
 }
 
+// A long drive on the wheels alone (k's uncertainty walks up), then a location point and one
+// short increment that reads 2 cm less than the wheels: the pose moves by about that much, not
+// by k's change times the whole path (blank corridor: the pose moved 13-17 cm back on such an
+// increment while k kept its correlation with the path driven since start-up). k still learns
+// from the increment, and P stays positive semi-definite.
+TEST(PoseEkf, AWeakIncrementAfterALongDriveMovesThePoseByItsInnovation) {
+  PoseEkf ekf;
+  ekf.reset({0, 0, 0});
+  for (int k = 0; k < 3000; ++k) ekf.predict(kDt, 0.3, 0.0, true);  // 60 s, 18 m
+  ekf.clone();
+  for (int k = 0; k < 10; ++k) ekf.predict(kDt, 0.3, 0.0, true);   // 6 cm
+  const Pose2 before = ekf.pose();
+  const double k_before = ekf.wheel_scale();
+  const Eigen::Vector3d d(0.04, 0.0, 0.0);  // vision: 4 cm
+  const Eigen::Matrix3d R = Eigen::Vector3d(1e-4, 1e-4, 1e-6).asDiagonal();
+  ASSERT_TRUE(ekf.update_visual(d, R)) << ekf.last_visual_chi2();
+  const double moved = ekf.pose().x - before.x;
+  EXPECT_LT(moved, 0.0);
+  EXPECT_GT(moved, -0.025) << "the pose moved by more than the increment disagrees with the wheels";
+  EXPECT_LT(ekf.wheel_scale(), k_before);  // the scale still learnt
+  const Eigen::SelfAdjointEigenSolver<PoseEkf::Covariance> eig(ekf.covariance());
+  EXPECT_GE(eig.eigenvalues().minCoeff(), -1e-12);
+}
+
 TEST(PoseEkf, GyroRateIsTakenAsIsAndWheelsCarryOnAlone) {
   PoseEkf ekf;
   ekf.reset({0, 0, 0});

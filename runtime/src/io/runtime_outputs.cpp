@@ -24,16 +24,11 @@ std::string tum_text(const Trajectory& trajectory) {
   return out;
 }
 
-void write_runtime_outputs(ExplorationRuntime& rt, const Trajectory& trajectory, const std::filesystem::path& dir,
-                           const std::map<std::string, double>& extra) {
-  prepare_output_dir(dir);
-  const OccupancyGrid& grid = rt.map_grid();
-  if (grid.width() > 0 && grid.height() > 0) {
-    write_map_server(grid, dir / "grid.yaml");
-    write_grid_png(grid, dir / "grid.png");
-  }
-  write_pcd(dir / "cloud.pcd", rt.mapper().cloud(), PcdEncoding::kBinaryCompressed);
-  write_text_file(dir / "trajectory.tum", tum_text(trajectory));
+RuntimeOutputs snapshot_runtime_outputs(ExplorationRuntime& rt, const Trajectory& trajectory, const std::map<std::string, double>& extra) {
+  RuntimeOutputs out;
+  out.grid = rt.map_grid();
+  out.cloud = rt.mapper().cloud();
+  out.trajectory = trajectory;
   const RuntimeStats& st = rt.stats();
   nlohmann::json j;
   j["profile"] = rt.profile().name;
@@ -55,7 +50,25 @@ void write_runtime_outputs(ExplorationRuntime& rt, const Trajectory& trajectory,
   j["input"] = detail::input_json(st.input, st.sets_with_missing, st.blind_holds, st.relocalizations);
   j["runtime"] = detail::timing_json(rt.timing());
   for (const auto& [k, v] : extra) j[k] = v;
-  write_text_file(dir / "summary.json", j.dump(2) + "\n");
+  out.summary_json = j.dump(2) + "\n";
+  return out;
+}
+
+void write_runtime_outputs(const RuntimeOutputs& o, const std::filesystem::path& dir) {
+  prepare_output_dir(dir);
+  if (o.grid.width() > 0 && o.grid.height() > 0) {
+    write_map_server(o.grid, dir / "grid.yaml");
+    write_grid_png(o.grid, dir / "grid.png");
+  }
+  write_pcd(dir / "cloud.pcd", o.cloud, PcdEncoding::kBinaryCompressed);
+  write_text_file(dir / "trajectory.tum", tum_text(o.trajectory));
+  write_text_file(dir / "summary.json", o.summary_json);
+}
+
+void write_runtime_outputs(ExplorationRuntime& rt, const Trajectory& trajectory, const std::filesystem::path& dir,
+                           const std::map<std::string, double>& extra) {
+  prepare_output_dir(dir);  // before the snapshot: a directory that cannot be made fails first
+  write_runtime_outputs(snapshot_runtime_outputs(rt, trajectory, extra), dir);
 }
 
 }  // namespace duet

@@ -185,11 +185,13 @@ void VisualLocalization::finish(const Job& job, const Tracked& tracked) {
     clone_lag_ = lag;
     ++stats_.location_points;
     stats_.resets += step.reset ? 1 : 0;
+    if (step.reset) last_reset_s_ = job.t;
   }
 }
 
 bool VisualLocalization::confirms_odometry(double now_s) const noexcept {
-  return health(now_s) == LocalizationHealth::kGood && (last_gated_s_ < 0.0 || now_s - last_gated_s_ > settings_.lost_after_s);
+  const auto long_ago = [&](double t) { return t < 0.0 || now_s - t > settings_.lost_after_s; };
+  return health(now_s) == LocalizationHealth::kGood && long_ago(last_gated_s_) && long_ago(last_reset_s_);
 }
 
 LocalizationHealth VisualLocalization::health(double now_s) const noexcept {

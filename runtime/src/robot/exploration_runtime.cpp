@@ -346,7 +346,7 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
   if (seen) last_seen_t_ = now_s;
   if (missing) ++stats_.sets_with_missing;
   const bool due = stamp + 1e-9 >= next_map_t_;
-  if (due && worker_ && map_in_flight_) {
+  if (due && worker_ && (map_in_flight_ || map_updates_held_)) {
     ++stats_.map_sets_skipped;  // the last update still runs: the next set after it is taken
   } else if (due) {
     for (std::size_t i = 0; i < n; ++i) in.t_frames += set.stamps_s[i];
@@ -499,6 +499,11 @@ void ExplorationRuntime::drain() {
     visual_worker_->wait_idle();
     finish_visual(last_now_s_);
   }
+}
+
+void ExplorationRuntime::wait_background_idle() const {
+  if (worker_) worker_->wait_idle();
+  if (visual_worker_) visual_worker_->wait_idle();
 }
 
 void ExplorationRuntime::tick(double now_s) {

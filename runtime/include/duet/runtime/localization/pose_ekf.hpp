@@ -22,7 +22,9 @@
 ///    a weakly constrained increment (few features) corrects the pose but does not recalibrate the
 ///    wheels, which would otherwise absorb its error and carry it on after vision is gone. The
 ///    Joseph form keeps the covariance right for that gain.
-///  - clone(): the location point moved to now.
+///  - clone(): the location point moved to now; k's correlation with the pose is dropped there,
+///    so an increment teaches k from the motion since the location point and does not move
+///    the whole path driven before it (see clone()).
 /// The velocity is the wheels' (corrected), not a state: wheel odometry at 50 Hz is not 50
 /// independent measurements of the speed - its error is systematic (tyre radius, slip on one
 /// floor). A filter that takes each message as one becomes sure of a wrong speed and averages

@@ -95,9 +95,11 @@ class VisualLocalization {
   [[nodiscard]] Pose2 pose() const noexcept { return ekf_.pose(); }
   [[nodiscard]] Twist twist() const noexcept { return ekf_.twist(); }
   [[nodiscard]] LocalizationHealth health(double now_s) const noexcept;
-  /// Vision confirms the wheels: health is good and no visual increment was gated out within
-  /// lost_after_s (a kidnapped robot's first view after the move is gated out, and tracking then
-  /// goes on from the new place - health alone would stay good). PoseCorrector::confirm_odometry.
+  /// Vision confirms the wheels: health is good, and within lost_after_s no visual increment was
+  /// gated out and the chain of location points did not start over (a reset): a kidnapped
+  /// robot's first view after the move is gated out when it still matches, or breaks the chain
+  /// when it does not, and tracking then goes on from the new place - health alone would stay
+  /// good. PoseCorrector::confirm_odometry.
   [[nodiscard]] bool confirms_odometry(double now_s) const noexcept;
   [[nodiscard]] const VisualLocalizationStats& stats() const noexcept { return stats_; }
   [[nodiscard]] const PoseEkf& ekf() const noexcept { return ekf_; }
@@ -114,7 +116,7 @@ class VisualLocalization {
   Pose2 last_track_pose_;          ///< the fused pose at the previous set's stamp
   Pose2 clone_lag_;                ///< the EKF's motion from the location point's stamp to the clone's time
   bool tracking_ = false;
-  double start_s_ = -1.0, last_ok_s_ = -1.0, last_gated_s_ = -1.0;
+  double start_s_ = -1.0, last_ok_s_ = -1.0, last_gated_s_ = -1.0, last_reset_s_ = -1.0;
   VisualLocalizationStats stats_;
 };
 

@@ -112,6 +112,15 @@ class ExplorationRuntime {
   /// kBackground: waits for the background tasks and takes their results (for shutdown and
   /// tests, not for the control thread). kLockstep: nothing to wait for.
   void drain();
+  /// kBackground: while held, no new map update is submitted (the sets due are skipped as while
+  /// one is in flight, counted in map_sets_skipped); control and decisions go on. With
+  /// wait_background_idle() it lets another thread read the map without holding control for a
+  /// map update: hold (between ticks), wait for the background off the control thread, then
+  /// drain() and read (between ticks), then let go. Control thread, between ticks.
+  void hold_map_updates(bool hold) noexcept { map_updates_held_ = hold; }
+  /// kBackground: blocks until the background tasks are done (their results not taken: drain()
+  /// does that). Any thread; not the control thread. kLockstep: returns at once.
+  void wait_background_idle() const;
 
   /// The operator's requests (control thread, between ticks). return_home(): stop exploring
   /// and drive back to the start (Navigator::return_home). stop(): the explorer is done now,
@@ -231,6 +240,7 @@ class ExplorationRuntime {
   OccupancyGrid empty_grid_;                         ///< map_grid() before the first map update
   ExplorerStats nav_stats_;                          ///< control side: the navigator's latest counters
   bool map_in_flight_ = false, decision_in_flight_ = false;
+  bool map_updates_held_ = false;  ///< hold_map_updates
   double decision_asked_wall_ = 0.0;
   std::mutex inbox_mutex_;
   std::vector<Event> inbox_;                         ///< controller -> navigator events
