@@ -19,7 +19,8 @@ pkgs=(build-essential cmake pkg-config
 if [ "${DUET_NO_ROS:-0}" != 1 ]; then
   pkgs+=(libroscpp-dev librosbag-dev libtf2-ros-dev libmessage-filters-dev libsensor-msgs-dev libnav-msgs-dev
          libgeometry-msgs-dev libvisualization-msgs-dev libstd-srvs-dev librcpputils-dev librcutils-dev
-         ros-core python3-rosbag python3-std-srvs rosbash)
+         ros-core python3-rosbag python3-std-srvs rosbash
+         python3-geometry-msgs python3-nav-msgs python3-sensor-msgs python3-visualization-msgs)
 fi
 # DUET_EXTRA_PKGS: more packages a caller needs (scripts/fuzz.sh: clang and libFuzzer).
 read -r -a extra_pkgs <<< "${DUET_EXTRA_PKGS:-}"

@@ -464,7 +464,9 @@ DUET_API void duet_runtime_save(duet_runtime runtime, const char* dir) {
           {"frames_paused", static_cast<double>(r.paused_frames.load())},
           {"odometry_pushed", static_cast<double>(ps.odometry_pushed)},
           {"odometry_queue_overflow", static_cast<double>(ps.odometry_overflowed)},
-          {"odometry_paused", static_cast<double>(r.paused_odometry.load())}};
+          {"odometry_paused", static_cast<double>(r.paused_odometry.load())},
+          {"gyro_pushed", static_cast<double>(ps.gyro_pushed)},
+          {"gyro_invalid", static_cast<double>(ps.gyro_invalid)}};
       in_arena(*r.device, [&] { snapshot = duet::snapshot_runtime_outputs(rt, r.trajectory, push); });  // the device's threads
     });
     if (!snapshot) api_fail(DUET_ERROR_INVALID_OPERATION, "the runtime has not run a control period yet: nothing to save");

@@ -70,13 +70,16 @@ def main():
     ap.add_argument("--speed", type=float, default=1.0, help="simulated seconds per wall second")
     ap.add_argument("--exit-when-done", action="store_true", help="the node saves and exits once the explorer is done")
     ap.add_argument("--record", help="rosbag record the node's input topics into this .bag")
-    ap.add_argument("--interrupt-at", type=float, help="send the node SIGINT after this many wall seconds")
+    ap.add_argument("--interrupt-at", type=float, help="send the node SIGINT after this many wall seconds (or, with --probe, "
+                    "as soon as the probe is done)")
     ap.add_argument("--call-save-at", type=float, action="append", default=[],
                     help="call the node's ~save service after this many wall seconds (repeatable)")
     ap.add_argument("--bridge-bin", help="the duet_sim_ros to run (default: BUILD/ros/duet_sim_ros)")
     ap.add_argument("--bridge", action="append", default=[], help="extra bridge parameter NAME:=VALUE")
     ap.add_argument("--node", action="append", default=[], help="extra node parameter NAME:=VALUE")
     ap.add_argument("--node-set", action="append", default=[], help="profile override KEY=VALUE for the node")
+    ap.add_argument("--probe", help="a command run (through the shell, with this run's ROS_MASTER_URI) once the bridge has "
+                    "started; its standard output, a JSON object, goes into run.json's \"probe\"")
     ap.add_argument("--sensors", default="kinect_front,kinect_right", help="the profile's sensor names (for --record)")
     a = ap.parse_args()
 
@@ -112,13 +115,18 @@ def main():
         bridge = start("bridge", [a.bridge_bin or os.path.join(a.build, "ros", "duet_sim_ros"), "_world:=" + a.world, "_profile:=" + a.profile,
                                   "_seed:=%d" % a.seed, "_sensor_rate:=%g" % a.sensor_rate, "_speed:=%g" % a.speed,
                                   "_max_time:=%g" % (a.time + 3.0), "_summary:=" + os.path.join(out, "sim.json")] + ["_" + p for p in a.bridge])
+        probe = None
+        if a.probe:
+            probe = subprocess.Popen(a.probe, shell=True, env=env, stdout=subprocess.PIPE, stderr=logs.setdefault(
+                "probe", open(os.path.join(out, "probe.log"), "w")), text=True, start_new_session=True)
         wall0 = time.time()
         limit = (a.time / a.speed if a.speed > 0 else a.time) * 2.0 + 60.0
         interrupted = False
         saves = sorted(a.call_save_at)
         result["save_calls"] = []
         while node.poll() is None and time.time() - wall0 < limit:
-            if a.interrupt_at is not None and not interrupted and time.time() - wall0 >= a.interrupt_at:
+            probe_done = probe is not None and probe.poll() is not None
+            if a.interrupt_at is not None and not interrupted and (time.time() - wall0 >= a.interrupt_at or probe_done):
                 os.killpg(node.pid, signal.SIGINT)
                 interrupted = True
             if saves and time.time() - wall0 >= saves[0]:
@@ -132,6 +140,17 @@ def main():
         if result["node_exit"] is None:
             result["node_exit"] = stop(node)
             result["node_timed_out"] = True
+        if probe is not None:
+            try:
+                text, _ = probe.communicate(timeout=30.0)
+            except subprocess.TimeoutExpired:
+                stop(probe, signal.SIGKILL)
+                text = ""
+            result["probe_exit"] = probe.returncode
+            try:
+                result["probe"] = json.loads(text) if text.strip() else {"error": "no output"}
+            except ValueError as e:
+                result["probe"] = {"error": "not JSON: %s: %r" % (e, text[:200])}
         result["bridge_exit"] = stop(bridge)
         result["wall_s"] = time.time() - wall0
     finally:

@@ -216,6 +216,10 @@ void DuetNode::make_runtime(const std::vector<std::string>& sets) {
     device_ = nullptr;
     throw std::runtime_error(std::string("duet: the profile '") + o_.profile + "' (" + duet_error_string(e) + "): " + msg);
   }
+  std::string overrides;
+  for (const auto& s : sets) overrides += (overrides.empty() ? "" : "; ") + s;
+  ROS_INFO("duet: profile %s, seed %llu, %zu override(s)%s%s", o_.profile.c_str(), static_cast<unsigned long long>(o_.seed), sets.size(),
+           sets.empty() ? "" : ": ", overrides.c_str());
   duet_runtime_set_event_callback(rt_, &DuetNode::on_event, this);
   sensor_info_.clear();
   sensor_names_.clear();

@@ -14,6 +14,9 @@ extern "C" void on_signal(int sig) { g_signal.store(sig); }
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Line-buffered: roslaunch (output="screen") or a log file gets each line as it is said, not
+  // a block at exit.
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
   // Our own SIGINT / SIGTERM handler: the node saves its maps before it shuts ROS down.
   ros::init(argc, argv, "duet", ros::init_options::NoSigintHandler);
   std::signal(SIGINT, on_signal);

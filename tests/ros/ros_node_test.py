@@ -6,20 +6,31 @@
    unknown encoding and one of the wrong size, an odometry message out of order), recorded with
    `rosbag record`: the node keeps exploring (0 collisions, the map grows), counts and names each
    fault, saves its maps at the end; then `duet replay` of the bag maps the same grid;
-2. the node interrupted by SIGINT: it saves its maps and exits 0.
+2. the node started paused with an IMU and its mounts from tf: a ROS client (ros_probe.py) starts
+   it, feeds the IMU (one NaN rate dropped and counted), reads /map, ~goal, ~path, ~frontiers
+   and ~state, and calls ~return_home and ~stop; then SIGINT: it saves its maps and exits 0;
+3. the launch files: duet.launch and bag.launch resolve, and duet.launch runs with a config file.
 """
 import argparse
+import importlib.util
 import json
 import os
 import re
 import shutil
+import signal
+import socket
 import subprocess
 import sys
+import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 RUN = os.path.join(ROOT, "ros", "scripts", "ros_sim_run.py")
 AGREE = os.path.join(ROOT, "ros", "scripts", "grid_agreement.py")
+PROBE = os.path.join(HERE, "ros_probe.py")
+# rospy is Debian's (python3-rospy): the system interpreter's, which another python3 first on the
+# PATH (pyenv, a venv) may not see.
+PROBE_PYTHON = sys.executable if importlib.util.find_spec("rospy") else "/usr/bin/python3"
 
 failures = []
 
@@ -28,6 +39,14 @@ def check(ok, what):
     print(("ok   " if ok else "FAIL ") + what)
     if not ok:
         failures.append(what)
+
+
+def free_port():
+    sock = socket.socket()
+    sock.bind(("127.0.0.1", 0))
+    port = sock.getsockname()[1]
+    sock.close()
+    return port
 
 
 def run(args, **kw):
@@ -90,10 +109,32 @@ def main():
     # 2. SIGINT saves. This node takes the sensors' mounts from tf (the bridge publishes them as a
     #    robot description would), not from its profile.
     out2 = os.path.join(a.out, "sigint")
+    #    It starts paused (autostart:=false) with an IMU (use_imu:=true); a ROS client (ros_probe.py)
+    #    starts it, feeds the IMU, reads its outputs and calls its services.
     r = run([sys.executable, RUN, "--build", a.build, "--out", out2, "--seed", "2", "--time", "300", "--sensor-rate", "5",
-             "--interrupt-at", "12", "--node", "mounts_from_tf:=true"])
+             "--interrupt-at", "60", "--node", "mounts_from_tf:=true", "--node", "autostart:=false", "--node", "use_imu:=true",
+             "--node", "map_period:=0.2", "--probe", "%s %s" % (PROBE_PYTHON, PROBE)])
     with open(os.path.join(out2, "run.json")) as f:
         res = json.load(f)
+    pr = res.get("probe", {})
+    print("probe: " + json.dumps(pr))
+    check(res.get("probe_exit") == 0, "the ROS client ran (exit %s)" % res.get("probe_exit"))
+    states = pr.get("states", [])
+    check(pr.get("paused_seen") and states[:1] == ["paused"], "the node waited paused for ~start (states %s)" % states)
+    check(pr.get("start", {}).get("success") and pr.get("exploring_seen"), "~start: exploring (%s)" % pr.get("start"))
+    check(pr.get("map", {}).get("frame") == "map" and pr["map"].get("known", 0) > 100, "/map in the map frame (%s)" % pr.get("map"))
+    check(pr.get("goal", {}).get("frame") == "map", "~goal in the map frame (%s)" % pr.get("goal"))
+    check(pr.get("path", {}).get("frame") == "map" and pr["path"].get("poses", 0) >= 2, "~path: >= 2 poses (%s)" % pr.get("path"))
+    check(pr.get("frontiers", {}).get("markers", 0) >= 1 and pr["frontiers"].get("frames") == ["map"],
+          "~frontiers: markers in the map frame (%s)" % pr.get("frontiers"))
+    check(pr.get("return_home", {}).get("success") and pr.get("returning_seen"), "~return_home: returning (%s)" % states)
+    check(pr.get("stop", {}).get("success") and pr.get("stopped_seen") and states[-1:] == ["done: stopped by the operator"],
+          "~stop: done, stopped by the operator (%s)" % states[-1:])
+    node2 = res.get("node", {})
+    check(node2.get("ros", {}).get("imu_received", 0) >= 50 and node2.get("ros", {}).get("imu_received", 0) <= pr.get("imu_published", 0),
+          "the IMU was taken (%s of %s)" % (node2.get("ros", {}).get("imu_received"), pr.get("imu_published")))
+    check(node2.get("gyro_invalid") == pr.get("imu_nan_published") == 1 and node2.get("gyro_pushed", 0) >= 50,
+          "... its NaN yaw rate dropped and counted (%s invalid of %s)" % (node2.get("gyro_invalid"), node2.get("gyro_pushed")))
     check(res.get("node_exit") == 0, "the node interrupted by SIGINT exits 0 (%s)" % res.get("node_exit"))
     check(os.path.isfile(os.path.join(out2, "maps", "grid.pgm")), "... and saved its maps")
     check("ros" in res.get("node", {}), "... and its summary")
@@ -105,6 +146,49 @@ def main():
           "the right Kinect's mount came from tf: yaw -90 deg as the bridge's profile (%s)" % (m.group(0) if m else "no such line"))
     check(res.get("node", {}).get("sets_integrated", 0) >= 3, "... and the node mapped with it (%s sets)"
           % res.get("node", {}).get("sets_integrated"))
+
+    # 3. The launch files. roslaunch resolves duet.launch's and bag.launch's args, nodes and params
+    #    (no master needed); then duet.launch runs (its own master on a free port) with a config
+    #    file laid over the profile as ~config, until the node says which overrides it took.
+    env = dict(os.environ, ROS_PACKAGE_PATH=os.path.join(a.build, "ros") + ":" + os.environ.get("ROS_PACKAGE_PATH", ""))
+    cfg = os.path.join(a.out, "config.yaml")
+    with open(cfg, "w") as f:
+        f.write("exploration:\n  view_range_m: 3.5\n")
+    r = run(["roslaunch", "--dump-params", "duet_ros", "duet.launch", "config:=" + cfg, "use_imu:=true"], env=env,
+            capture_output=True, text=True, timeout=60)
+    check(r.returncode == 0 and "/duet/config/exploration/view_range_m: 3.5" in r.stdout and "/duet/use_imu: true" in r.stdout,
+          "duet.launch loads the config file as ~config (%s)" % (r.stdout + r.stderr).strip().replace("\n", "; "))
+    r = run(["roslaunch", "--args", "/duet", "duet_ros", "duet.launch"], env=env, capture_output=True, text=True, timeout=60)
+    check(r.returncode == 0 and os.path.join(a.build, "ros", "duet_ros") in r.stdout, "duet.launch runs this build's node (%s)" % r.stdout.strip())
+    r = run(["roslaunch", "--nodes", "duet_ros", "bag.launch", "bag:=" + cfg], env=env, capture_output=True, text=True, timeout=60)
+    check(r.returncode == 0 and sorted(r.stdout.split()) == ["/duet", "/play"], "bag.launch: rosbag play and the node (%s)" % r.stdout.split())
+    r = run(["roslaunch", "--dump-params", "duet_ros", "bag.launch", "bag:=" + cfg], env=env, capture_output=True, text=True, timeout=60)
+    check(r.returncode == 0 and "/use_sim_time: true" in r.stdout, "bag.launch runs on the bag's clock")
+    port = free_port()
+    env3 = dict(env, ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOSTNAME="127.0.0.1", ROS_HOME=os.path.join(a.out, "ros_home3"),
+                PYTHONUNBUFFERED="1",  # roslaunch passes the node's output on as it comes
+                ROS_LOG_DIR=os.path.join(a.out, "ros_log3"))
+    log3 = os.path.join(a.out, "duet_launch.log")
+    with open(log3, "w") as f:
+        p = subprocess.Popen(["roslaunch", "-p", str(port), "duet_ros", "duet.launch", "config:=" + cfg,
+                              "output_dir:=" + os.path.join(a.out, "launch_maps")], env=env3, stdout=f, stderr=subprocess.STDOUT,
+                             start_new_session=True)
+        said = ""
+        end = time.time() + 60.0
+        while time.time() < end and p.poll() is None and "override(s)" not in said:
+            time.sleep(0.5)
+            with open(log3) as g:
+                said = g.read()
+        os.killpg(p.pid, signal.SIGINT)
+        try:
+            code = p.wait(30.0)
+        except subprocess.TimeoutExpired:
+            os.killpg(p.pid, signal.SIGKILL)
+            code = p.wait()
+    line = next((l for l in said.splitlines() if "override(s)" in l), "no such line")
+    check("exploration.view_range_m=3.5" in line and "runtime.sensor_rate_hz=30" in line,
+          "duet.launch started the node with the config file's key and the launch's sensor rate (%s)" % line.strip())
+    check(code == 0, "roslaunch stopped on SIGINT (exit %s)" % code)
 
     print("%d checks failed" % len(failures) if failures else "all checks passed")
     return 1 if failures else 0
