@@ -54,6 +54,7 @@ struct ExploreOptions {
   std::string on_done;  // empty: the profile's exploration.on_done
   std::vector<std::string> faults;  // --fault, added to the profile's
   std::string record;               // --record DIR
+  std::string start;                // --start x,y,theta (empty: the world's, or the map's .start file)
   std::string strategy = "profile";
   std::vector<std::string> configs, sets;
   bool quiet = false;
@@ -174,6 +175,7 @@ int run_explore(const ExploreOptions& o) {
   prepare_output_dir(o.out);  // before the run, not after it
   sim::World world = sim::resolve_world(o.world);
   Profile profile = resolve_profile(o.profile, overlays(o.configs, o.sets));
+  if (!o.start.empty()) sim::set_start(world, sim::parse_start(o.start), profile.chassis.radius_m, "--start");
   apply_strategy(profile, o.strategy);
   sim::ExploreSettings es = make_settings(profile, o.seed, o.max_time, rate);
   es.realtime = o.realtime;
@@ -350,6 +352,10 @@ void add_explore_command(CLI::App& app, int& exit_code) {
   auto* cmd = app.add_subcommand("explore", "Explore a simulated world autonomously (the paper's experiment) and write the maps");
   cmd->add_option("-w,--world", o->world, "a built-in world (lab), a world YAML or a map_server map YAML")->capture_default_str();
   cmd->add_option("-p,--profile", o->profile, "robot profile: dual, single or a profile YAML")->capture_default_str();
+  cmd->add_option("--start", o->start,
+                  "the robot's start pose x,y,theta (m, m, rad; the world's frame), checked: on the floor and clear of walls "
+                  "for the profile's radius. Default: the world's start - for a map_server map, NAME.start beside its YAML when "
+                  "present (the real robot's first pose, one line x y theta), else a free spot near the map's centre");
   cmd->add_option("-s,--seed", o->seed, "random seed (sensor and odometry noise, Procedure 1)")->capture_default_str();
   cmd->add_option("-t,--max-time", o->max_time, "simulated time limit [s]")->capture_default_str();
   cmd->add_option("-o,--out", o->out, "output folder")->capture_default_str();

@@ -17,6 +17,7 @@ namespace duet::app {
 nlohmann::json to_json(const sim::ExploreSummary& s) {
   nlohmann::json j;
   j["world"] = s.world;
+  j["start"] = {{"x_m", s.start.x}, {"y_m", s.start.y}, {"theta_rad", s.start.theta}};
   j["profile"] = s.profile;
   j["seed"] = s.seed;
   j["stop_reason"] = sim::to_string(s.stop_reason);

@@ -2,6 +2,7 @@
 // bad files with the file and the key, and the geometry queries agree with plain references.
 #include <duet/kernels/error.hpp>
 #include <duet/runtime/io/grid_io.hpp>
+#include <duet/runtime/io/output.hpp>
 #include <duet/sim/world.hpp>
 
 #include <gtest/gtest.h>
@@ -391,6 +392,117 @@ TEST(SimWorldMap, WillowGarageOfficeBecomesAWorld) {
   for (const auto m : mask) reach += m;
   // An office floor: hundreds of square metres reachable.
   EXPECT_GT(static_cast<double>(reach) * 0.01, 200.0);
+}
+
+// The room of ExtrudesOccupiedCellsOfAMapServerMap: free from (-0.7, -0.2) to (2.6, 2.1), a block
+// at (0.5..0.9, 0.5..0.8), walls around.
+fs::path write_room(const TempDir& dir) {
+  duet::OccupancyGrid grid(0.1f, Eigen::Vector2f(-1.0f, -0.5f), 40, 30);
+  for (int y = 0; y < 30; ++y)
+    for (int x = 0; x < 40; ++x) {
+      float l = duet::OccupancyGrid::kUnknown;
+      if (x >= 2 && x <= 37 && y >= 2 && y <= 27) l = (x == 2 || x == 37 || y == 2 || y == 27) ? 3.0f : -2.0f;
+      if (x >= 15 && x <= 18 && y >= 10 && y <= 12) l = 3.0f;
+      grid.logodds()[grid.index(x, y)] = l;
+    }
+  duet::write_map_server(grid, dir / "room.yaml");
+  return dir / "room.yaml";
+}
+
+template <class F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const duet::Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+// A map's NAME.start beside its YAML is where the robot starts (the real robot's first pose);
+// without one - or with start_file off - the computed start; bad files are named errors.
+TEST(SimWorldMap, AStartFileBesideTheMapIsWhereTheRobotStarts) {
+  TempDir dir;
+  const fs::path map = write_room(dir);
+  const World computed = duet::sim::world_from_map(map);
+  duet::write_text_file(dir / "room.start", "# x y theta\n2.0 1.5 0.75\n");
+  const World w = duet::sim::load_world(map);
+  EXPECT_FLOAT_EQ(w.start.x, 2.0f);
+  EXPECT_FLOAT_EQ(w.start.y, 1.5f);
+  EXPECT_FLOAT_EQ(w.start.theta, 0.75f);
+  duet::sim::MapWorldOptions no_file;
+  no_file.start_file = false;
+  const World w2 = duet::sim::world_from_map(map, no_file);
+  EXPECT_EQ(w2.start.x, computed.start.x);
+  EXPECT_EQ(w2.start.y, computed.start.y);
+  const auto expect_error = [&](const std::string& text, const std::string& want) {
+    duet::write_text_file(dir / "room.start", text);
+    const std::string e = error_of([&] { (void)duet::sim::load_world(map); });
+    EXPECT_NE(e.find("room.start"), std::string::npos) << e;
+    EXPECT_NE(e.find(want), std::string::npos) << "for '" << text << "': " << e;
+  };
+  expect_error("", "no pose");
+  expect_error("1.0 2.0\n", "expected 3 numbers");
+  expect_error("1.0 two 0.5\n", "y is not a number: 'two'");
+  expect_error("1.0 1.0 nan\n", "theta must be finite");
+  expect_error("1.0 1.0 0\n1.0 1.0 0\n", ":2: a second pose");
+  // The centre inside the block: validate() names it.
+  duet::write_text_file(dir / "room.start", "0.7 0.65 0\n");
+  EXPECT_NE(error_of([&] { (void)duet::sim::load_world(map); }).find("inside"), std::string::npos);
+}
+
+TEST(SimWorldStart, ParseStartTakesXYThetaAndNamesWhatIsWrong) {
+  const duet::Pose2 p = duet::sim::parse_start("1.5, -2,0.25");
+  EXPECT_FLOAT_EQ(p.x, 1.5f);
+  EXPECT_FLOAT_EQ(p.y, -2.0f);
+  EXPECT_FLOAT_EQ(p.theta, 0.25f);
+  EXPECT_NEAR(duet::sim::parse_start("0,0,7").theta, 7.0f - 2.0f * 3.14159265f, 1e-5f);  // wrapped
+  EXPECT_NE(error_of([] { (void)duet::sim::parse_start("1,2"); }).find("expected 3 numbers"), std::string::npos);
+  EXPECT_NE(error_of([] { (void)duet::sim::parse_start("1,2,3,4"); }).find("got 4"), std::string::npos);
+  EXPECT_NE(error_of([] { (void)duet::sim::parse_start("1,,3"); }).find("y is not a number"), std::string::npos);
+  EXPECT_NE(error_of([] { (void)duet::sim::parse_start("1x,2,3"); }).find("x is not a number: '1x'"), std::string::npos);
+  EXPECT_NE(error_of([] { (void)duet::sim::parse_start("inf,2,3"); }).find("x must be finite"), std::string::npos);
+  EXPECT_NE(error_of([] { (void)duet::sim::parse_start(""); }).find("start ''"), std::string::npos);
+}
+
+// set_start: a robot of the given radius must stand there - on the floor, clear of every solid;
+// the error names the pose and the solid, and leaves the world as it was.
+TEST(SimWorldStart, SetStartChecksThatTheRobotStandsThere) {
+  TempDir dir;
+  World w = duet::sim::load_world(write_room(dir));
+  const duet::Pose2 before = w.start;
+  const auto rejected = [&](duet::Pose2 p, const std::string& want) {
+    const std::string e = error_of([&] { duet::sim::set_start(w, p, 0.2f, "--start"); });
+    EXPECT_NE(e.find("--start (" ), std::string::npos) << e;
+    EXPECT_NE(e.find(want), std::string::npos) << e;
+    EXPECT_EQ(w.start.x, before.x);
+    EXPECT_EQ(w.start.y, before.y);
+  };
+  rejected({0.7f, 0.65f, 0.0f}, "overlaps");          // the block's middle
+  rejected({1.05f, 0.65f, 0.0f}, "radius 0.2 m");     // 0.15 m beside the block: the robot's edge is in it
+  rejected({-0.65f, 1.0f, 0.0f}, "overlaps");         // against the west wall
+  rejected({50.0f, 1.0f, 0.0f}, "off the floor");
+  rejected({1.0f, NAN, 0.0f}, "not a finite pose");
+  duet::sim::set_start(w, {2.0f, 1.5f, 1.0f}, 0.2f, "--start");
+  EXPECT_EQ(w.start.x, 2.0f);
+  EXPECT_EQ(w.start.theta, 1.0f);
+}
+
+// The five real buildings' start files (the real robots' first poses): each is read, and a robot
+// of the dual profile's radius stands clear there.
+TEST(SimWorldMap, TheRealBuildingsStartWhereTheirRobotsDid) {
+  int seen = 0;
+  for (const char* name : {"freiburg-101", "orebro", "belgioioso", "fhw", "edmonton"}) {
+    const fs::path map = fs::path(DUET_DATA_DIR) / "maps" / (std::string(name) + ".yaml");
+    if (!fs::exists(map)) continue;
+    ++seen;
+    World w = duet::sim::world_from_map(map);
+    const duet::Pose2 file = duet::sim::read_start_file(fs::path(DUET_DATA_DIR) / "maps" / (std::string(name) + ".start"));
+    EXPECT_EQ(w.start.x, file.x) << name;
+    EXPECT_EQ(w.start.y, file.y) << name;
+    EXPECT_NO_THROW(duet::sim::set_start(w, w.start, 0.177f, name)) << name;
+  }
+  if (seen == 0) GTEST_SKIP() << "data absent: " << DUET_DATA_DIR;
 }
 
 TEST(SimWorld, TooLargeAFloorNamesTheWorldFile) {

@@ -281,6 +281,7 @@ void SimExplore::run(const std::function<void(const SimExplore&)>& progress) {
 ExploreSummary SimExplore::summary() const {
   ExploreSummary s;
   s.world = world_->name;
+  s.start = world_->start;
   s.profile = profile_.name;
   s.seed = settings_.seed;
   s.stop_reason = reason_;

@@ -100,8 +100,12 @@ World world_from_map(const std::filesystem::path& map_yaml, const MapWorldOption
       x = x1 + 1;
     }
 
+  std::filesystem::path start_file = map_yaml;
+  start_file.replace_extension(".start");
   if (options.start) {
     world.start = *options.start;
+  } else if (options.start_file && std::filesystem::exists(start_file)) {
+    set_start(world, read_start_file(start_file), 0.0f, start_file.string());  // on the floor, not inside a wall
   } else {
     // The largest 4-connected component of cells with room for the robot; start at its cell
     // nearest the component's centroid.

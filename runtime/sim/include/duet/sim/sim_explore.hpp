@@ -110,6 +110,7 @@ enum class StopReason {
 
 struct ExploreSummary {
   std::string world, profile;
+  Pose2 start;  ///< the robot's start pose (world frame)
   std::uint64_t seed = 0;
   StopReason stop_reason = StopReason::kRunning;
   std::string explorer_status;           ///< the explorer's last decision status (when done)

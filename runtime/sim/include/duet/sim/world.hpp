@@ -103,6 +103,9 @@ struct MapWorldOptions {
   /// Where the robot starts; nullopt = the free cell nearest the centre of the largest
   /// connected free area that has room for a robot of `start_clearance_m` radius.
   std::optional<Pose2> start;
+  /// With no `start`: the map's start file beside its YAML (`NAME.start`, read_start_file), when
+  /// there is one - the real robot's first pose - before the computed start.
+  bool start_file = true;
   float start_clearance_m = 0.35f;  ///< [m]
   Surface wall_surface{{200, 195, 185}, Texture::kNoise, 0.10f};
 };
@@ -110,6 +113,19 @@ struct MapWorldOptions {
 /// A world from a ROS map_server map (YAML + image): occupied cells extruded to walls,
 /// unknown cells are treated as walls too (the map's outside is solid), free cells are floor.
 [[nodiscard]] World world_from_map(const std::filesystem::path& map_yaml, const MapWorldOptions& options = {});
+
+/// A start pose file: one line "x y theta" (m, m, rad; the map's frame), as the real robots'
+/// first poses in ../shared/data/maps/*.start; blank lines and '#' comments allowed. Throws
+/// kIo (unreadable) or kInvalidArgument naming the file, the line and what was wrong.
+[[nodiscard]] Pose2 read_start_file(const std::filesystem::path& path);
+/// "x,y,theta" (m, m, rad), as `duet explore --start` takes it. Throws kInvalidArgument naming
+/// the text and what was wrong.
+[[nodiscard]] Pose2 parse_start(std::string_view text);
+/// Moves the world's start to `start` after checking that a robot of `radius_m` stands there: on
+/// the floor and clear of every solid. Throws kInvalidArgument naming `what` (e.g. "--start"),
+/// the pose and the solid it overlaps (or "off the floor"); the world is unchanged then.
+/// radius_m = 0: only the centre is checked (the solid it is inside).
+void set_start(World& world, const Pose2& start, float radius_m, std::string_view what);
 
 /// The built-in worlds by name ("lab"); throws kInvalidArgument naming the known ones.
 [[nodiscard]] World builtin_world(std::string_view name);
