@@ -327,9 +327,9 @@ polygons:
   EXPECT_NEAR(duet::sim::clearance(w, {2.0f, 1.0f}), 0.4f, 1e-5f);
 }
 
-TEST(SimWorldMap, ExtrudesOccupiedCellsOfAMapServerMap) {
-  TempDir dir;
-  // A 40 x 30 map at 0.1 m: a closed room with one inner block, unknown outside.
+// A 40 x 30 map at 0.1 m: a closed room - free from (-0.7, -0.2) to (2.6, 2.1) - with one inner
+// block at (0.5..0.9, 0.5..0.8), unknown outside.
+fs::path write_room(const TempDir& dir) {
   duet::OccupancyGrid grid(0.1f, Eigen::Vector2f(-1.0f, -0.5f), 40, 30);
   for (int y = 0; y < 30; ++y)
     for (int x = 0; x < 40; ++x) {
@@ -339,6 +339,13 @@ TEST(SimWorldMap, ExtrudesOccupiedCellsOfAMapServerMap) {
       grid.logodds()[grid.index(x, y)] = l;
     }
   duet::write_map_server(grid, dir / "room.yaml");
+  return dir / "room.yaml";
+}
+
+TEST(SimWorldMap, ExtrudesOccupiedCellsOfAMapServerMap) {
+  TempDir dir;
+  write_room(dir);
+  const duet::OccupancyGrid grid = duet::read_map_server(dir / "room.yaml");
   const World w = duet::sim::load_world(dir / "room.yaml");  // dispatches on the map keys
   EXPECT_EQ(w.name, "room");
   EXPECT_NEAR(w.floor.min.x(), -1.0f, 1e-6f);
@@ -392,21 +399,6 @@ TEST(SimWorldMap, WillowGarageOfficeBecomesAWorld) {
   for (const auto m : mask) reach += m;
   // An office floor: hundreds of square metres reachable.
   EXPECT_GT(static_cast<double>(reach) * 0.01, 200.0);
-}
-
-// The room of ExtrudesOccupiedCellsOfAMapServerMap: free from (-0.7, -0.2) to (2.6, 2.1), a block
-// at (0.5..0.9, 0.5..0.8), walls around.
-fs::path write_room(const TempDir& dir) {
-  duet::OccupancyGrid grid(0.1f, Eigen::Vector2f(-1.0f, -0.5f), 40, 30);
-  for (int y = 0; y < 30; ++y)
-    for (int x = 0; x < 40; ++x) {
-      float l = duet::OccupancyGrid::kUnknown;
-      if (x >= 2 && x <= 37 && y >= 2 && y <= 27) l = (x == 2 || x == 37 || y == 2 || y == 27) ? 3.0f : -2.0f;
-      if (x >= 15 && x <= 18 && y >= 10 && y <= 12) l = 3.0f;
-      grid.logodds()[grid.index(x, y)] = l;
-    }
-  duet::write_map_server(grid, dir / "room.yaml");
-  return dir / "room.yaml";
 }
 
 template <class F>
