@@ -18,7 +18,6 @@ import os
 import re
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -28,6 +27,8 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 RUN = os.path.join(ROOT, "ros", "scripts", "ros_sim_run.py")
 AGREE = os.path.join(ROOT, "ros", "scripts", "grid_agreement.py")
 PROBE = os.path.join(HERE, "ros_probe.py")
+sys.path.insert(0, os.path.dirname(RUN))
+from ros_sim_run import free_port  # noqa: E402  (a free loopback port for duet.launch's master)
 # rospy is Debian's (python3-rospy): the system interpreter's, which another python3 first on the
 # PATH (pyenv, a venv) may not see.
 PROBE_PYTHON = sys.executable if importlib.util.find_spec("rospy") else "/usr/bin/python3"
@@ -39,14 +40,6 @@ def check(ok, what):
     print(("ok   " if ok else "FAIL ") + what)
     if not ok:
         failures.append(what)
-
-
-def free_port():
-    sock = socket.socket()
-    sock.bind(("127.0.0.1", 0))
-    port = sock.getsockname()[1]
-    sock.close()
-    return port
 
 
 def run(args, **kw):

@@ -6,11 +6,12 @@
 #include <duet/sim/world.hpp>
 
 #include "config/yaml_reader.hpp"
+#include "io/cloud_io_detail.hpp"
 #include "io/file_util.hpp"
 
-#include <cerrno>
 #include <cmath>
-#include <cstdlib>
+#include <numbers>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -27,14 +28,12 @@ std::string to_pose(const std::vector<std::string>& fields, Pose2& out) {
   static const char* const kNames[3] = {"x", "y", "theta"};
   for (int i = 0; i < 3; ++i) {
     const std::string& f = fields[static_cast<std::size_t>(i)];
-    char* end = nullptr;
-    errno = 0;
-    const double d = std::strtod(f.c_str(), &end);
-    if (f.empty() || end != f.c_str() + f.size() || errno == ERANGE) return std::string(kNames[i]) + " is not a number: '" + f + "'";
+    double d = 0.0;
+    if (!duet::detail::cloud_io::parse_real(f, d)) return std::string(kNames[i]) + " is not a number: '" + f + "'";
     if (!std::isfinite(d) || std::fabs(d) > 1e6) return std::string(kNames[i]) + " must be finite and within 1e6, got " + f;
     v[i] = static_cast<float>(d);
   }
-  out = Pose2{v[0], v[1], std::remainder(v[2], 2.0f * 3.14159265f)};
+  out = Pose2{v[0], v[1], std::remainder(v[2], 2.0f * std::numbers::pi_v<float>)};
   return {};
 }
 
@@ -87,17 +86,12 @@ void set_start(World& world, const Pose2& start, float radius_m, std::string_vie
     fail(ErrorCode::kInvalidArgument, at + ": not a finite pose");
   const Eigen::Vector2f c(start.x, start.y);
   if (!world.floor.contains(c)) fail(ErrorCode::kInvalidArgument, at + " is off the floor of " + world.name);
-  for (const Solid& s : world.solids) {
-    World one;
-    one.floor = world.floor;
-    one.solids = {s};
-    if (collides(one, c, radius_m) && radius_m <= 0.0f) fail(ErrorCode::kInvalidArgument, at + " is inside " + s.name + " of " + world.name);
-    if (collides(one, c, radius_m))
-      fail(ErrorCode::kInvalidArgument, at + ": a robot of radius " + format_number(std::round(radius_m * 1000.0) / 1000.0) + " m there overlaps " + s.name + " of " +
-                                            world.name);
-  }
-  if (collides(world, c, radius_m))  // the floor's edge within the radius
-    fail(ErrorCode::kInvalidArgument, at + ": a robot of radius " + format_number(std::round(radius_m * 1000.0) / 1000.0) + " m there reaches off the floor of " + world.name);
+  const std::string robot = ": a robot of radius " + format_number(std::round(radius_m * 1000.0) / 1000.0) + " m there ";
+  if (const Solid* s = overlapping_solid(world, c, radius_m))
+    fail(ErrorCode::kInvalidArgument, radius_m > 0.0f ? at + robot + "overlaps " + s->name + " of " + world.name
+                                                      : at + " is inside " + s->name + " of " + world.name);
+  if (collides(world, c, radius_m))  // no solid: the floor's edge within the radius
+    fail(ErrorCode::kInvalidArgument, at + robot + "reaches off the floor of " + world.name);
   world.start = start;
 }
 

@@ -50,12 +50,7 @@ void bbox(const std::vector<Eigen::Vector2f>& poly, Eigen::Vector2f& lo, Eigen::
 // ---------------------------------------------------------------------------------------------
 // Geometry queries.
 
-bool collides(const World& world, const Eigen::Vector2f& centre, float radius_m, float z_low_m, float z_high_m) {
-  const Region& f = world.floor;
-  if (!centre.allFinite()) return true;
-  if (centre.x() - radius_m < f.min.x() || centre.y() - radius_m < f.min.y() || centre.x() + radius_m > f.max.x() ||
-      centre.y() + radius_m > f.max.y())
-    return true;
+const Solid* overlapping_solid(const World& world, const Eigen::Vector2f& centre, float radius_m, float z_low_m, float z_high_m) {
   const float r2 = radius_m * radius_m;
   for (const Solid& s : world.solids) {
     if (!height_overlaps(s, z_low_m, z_high_m)) continue;
@@ -64,11 +59,20 @@ bool collides(const World& world, const Eigen::Vector2f& centre, float radius_m,
     if (centre.x() + radius_m < lo.x() || centre.x() - radius_m > hi.x() || centre.y() + radius_m < lo.y() ||
         centre.y() - radius_m > hi.y())
       continue;
-    if (point_in_polygon(s.polygon, centre)) return true;
+    if (point_in_polygon(s.polygon, centre)) return &s;
     for (std::size_t i = 0, n = s.polygon.size(); i < n; ++i)
-      if (segment_distance_sq(s.polygon[i], s.polygon[(i + 1) % n], centre) < r2) return true;
+      if (segment_distance_sq(s.polygon[i], s.polygon[(i + 1) % n], centre) < r2) return &s;
   }
-  return false;
+  return nullptr;
+}
+
+bool collides(const World& world, const Eigen::Vector2f& centre, float radius_m, float z_low_m, float z_high_m) {
+  const Region& f = world.floor;
+  if (!centre.allFinite()) return true;
+  if (centre.x() - radius_m < f.min.x() || centre.y() - radius_m < f.min.y() || centre.x() + radius_m > f.max.x() ||
+      centre.y() + radius_m > f.max.y())
+    return true;
+  return overlapping_solid(world, centre, radius_m, z_low_m, z_high_m) != nullptr;
 }
 
 float clearance(const World& world, const Eigen::Vector2f& p, float z_low_m, float z_high_m) {

@@ -142,6 +142,10 @@ void validate(World& world, std::string_view source_name = "world");
 /// height range overlaps [z_low_m, z_high_m] (the robot's body height), or leaves the floor.
 [[nodiscard]] bool collides(const World& world, const Eigen::Vector2f& centre, float radius_m,
                             float z_low_m = 0.0f, float z_high_m = 0.6f);
+/// The first solid such a disc overlaps (height range as collides()), nullptr if none; the
+/// floor's edge is not checked. `centre` must be finite.
+[[nodiscard]] const Solid* overlapping_solid(const World& world, const Eigen::Vector2f& centre, float radius_m,
+                                             float z_low_m = 0.0f, float z_high_m = 0.6f);
 
 /// Distance [m] from `p` to the nearest solid (height range as collides()) or the floor's
 /// edge; 0 inside a solid or outside the floor.
