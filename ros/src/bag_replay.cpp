@@ -19,6 +19,7 @@
 #include <memory>
 #include <set>
 #include <stdexcept>
+#include <vector>
 
 namespace duet_ros {
 namespace {
@@ -80,18 +81,20 @@ BagReplayResult replay_bag(const BagReplayOptions& o) {
   res.sensor_rate_hz = res.profile_sensor_rate_hz;
   const bool rate_set = std::any_of(sets.begin(), sets.end(), [](const std::string& s) { return s.rfind("runtime.sensor_rate_hz=", 0) == 0; });
   try {
+    // 1 / the median interval between a sensor's images: robust to a camera that stopped for a
+    // while, to bursts when the recorder subscribed, and to extra (malformed) images.
     double best = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
       rosbag::View v(bag, rosbag::TopicQuery(depth_topic[i]));
-      std::size_t images = 0;
-      double t0 = 0.0, t1 = 0.0;
-      for (const rosbag::MessageInstance& m : v) {  // the index only: nothing is read or decoded
-        if (m.getDataType() != "sensor_msgs/Image") continue;
-        const double t = m.getTime().toSec();
-        if (images++ == 0) t0 = t;
-        t1 = t;
-      }
-      if (images >= 10 && t1 > t0) best = std::max(best, static_cast<double>(images - 1) / (t1 - t0));
+      std::vector<double> stamps;
+      for (const rosbag::MessageInstance& m : v)  // the index only: nothing is read or decoded
+        if (m.getDataType() == "sensor_msgs/Image") stamps.push_back(m.getTime().toSec());
+      std::vector<double> dt;
+      for (std::size_t k = 1; k < stamps.size(); ++k)
+        if (stamps[k] > stamps[k - 1]) dt.push_back(stamps[k] - stamps[k - 1]);
+      if (dt.size() < 9) continue;
+      std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
+      best = std::max(best, 1.0 / dt[dt.size() / 2]);
     }
     res.bag_sensor_rate_hz = best;
   } catch (const std::exception& e) {  // rosbag's and ros::Time's errors on a damaged bag

@@ -90,7 +90,8 @@ def main():
     if r.returncode == 0:
         with open(os.path.join(rep, "summary.json")) as f:
             rate = json.load(f).get("bag", {}).get("sensor_rate_hz")
-        check(rate == 5.0, "duet replay took the bag's camera rate, 5 Hz (%s)" % rate)
+        # 1 / the median interval of the bag's (sim-clock) receipt stamps, rounded to 0.1 Hz
+        check(rate is not None and abs(rate - 5.0) <= 0.1, "duet replay took the bag's camera rate, 5 Hz (%s)" % rate)
     if r.returncode == 0:
         r = run([sys.executable, AGREE, os.path.join(out1, "maps", "grid.yaml"), os.path.join(rep, "grid.yaml"),
                  "--min-agreement", "0.95", "--min-known-ratio", "0.9"], capture_output=True, text=True)
