@@ -43,6 +43,7 @@ int run_map_folder(const std::string& input, const std::string& out, const std::
 /// summary.json's timing and input blocks: the runtime's (io/run_json.hpp), shared with duet_runtime_save.
 using detail::input_json;
 using detail::timing_json;
+using detail::left_json;
 
 /// summary.json's "faults": each injected fault (faults.hpp) and how often it acted.
 [[nodiscard]] nlohmann::json faults_json(const std::vector<FaultCount>& faults);

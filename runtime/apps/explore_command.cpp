@@ -20,6 +20,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -228,119 +229,224 @@ int run_explore(const ExploreOptions& o) {
   return stopped_by ? StopSignals::exit_code(stopped_by) : 0;
 }
 
-/// compare.json: every run's summary and the means per variant (Explore-Bench's measures:
-/// coverage, times to the paper's area and to 90 % coverage over the runs that reached them,
-/// total time, path length, collisions); "interrupted" says why a comparison stopped early.
-nlohmann::json compare_json(const std::string& world, const nlohmann::json& runs, const std::vector<std::string>& variants,
+/// The means of one variant's runs (Explore-Bench's measures: coverage, times to the paper's
+/// area and to 90 % coverage over the runs that reached them, total time, path length,
+/// collisions, runs that stopped by themselves).
+nlohmann::json variant_means(const nlohmann::json& runs, const std::string& variant, const std::string& world) {
+  double t31 = 0.0, t90 = 0.0, cov = 0.0, total = 0.0, path = 0.0;
+  int n31 = 0, n90 = 0, n = 0, self_stopped = 0;
+  std::size_t collisions = 0;
+  for (const auto& r : runs) {
+    if (r["variant"].get<std::string>() != variant || (!world.empty() && r["world"].get<std::string>() != world)) continue;
+    ++n;
+    cov += r["coverage"].get<double>();
+    total += r["sim_time_s"].get<double>();
+    path += r["path_length_m"].get<double>();
+    collisions += r["collisions"].get<std::size_t>();
+    self_stopped += r["stop_reason"].get<std::string>() == "explorer_done";
+    if (!r["t_31m2_s"].is_null()) {
+      t31 += r["t_31m2_s"].get<double>();
+      ++n31;
+    }
+    if (!r["t90_s"].is_null()) {
+      t90 += r["t90_s"].get<double>();
+      ++n90;
+    }
+  }
+  return {{"runs", n},
+          {"coverage", n ? cov / n : 0.0},
+          {"collisions", collisions},
+          {"runs_stopped_by_themselves", self_stopped},
+          {"t_total_s", n ? total / n : 0.0},
+          {"path_length_m", n ? path / n : 0.0},
+          {"runs_reaching_31m2", n31},
+          {"t_31m2_s", n31 ? nlohmann::json(t31 / n31) : nlohmann::json(nullptr)},
+          {"runs_reaching_90pct", n90},
+          {"t90_s", n90 ? nlohmann::json(t90 / n90) : nlohmann::json(nullptr)}};
+}
+
+/// compare.json: every run's summary; "mean": the means per variant over all runs; with several
+/// worlds also "per_world" (the means per world and variant) and "mean_over_worlds" (each world
+/// weighs the same: the mean of its means; T_90 over the worlds where it was reached, and
+/// "t90_worlds" how many); "t90_ratio": each variant's mean T_90 over the worlds where every
+/// variant reached 90 %, divided into the first variant's (> 1: the first is faster);
+/// "interrupted" says why a comparison stopped early.
+nlohmann::json compare_json(const std::vector<std::string>& worlds, const nlohmann::json& runs, const std::vector<std::string>& variants,
                             const std::string& interrupted) {
   nlohmann::json j;
-  j["world"] = world;
+  j["world"] = worlds.size() == 1 ? nlohmann::json(worlds.front()) : nlohmann::json(nullptr);
+  j["worlds"] = worlds;
   j["runs"] = runs;
+  for (const std::string& variant : variants) j["mean"][variant] = variant_means(runs, variant, "");
+  for (const std::string& w : worlds)
+    for (const std::string& variant : variants) j["per_world"][w][variant] = variant_means(runs, variant, w);
   for (const std::string& variant : variants) {
-    double t31 = 0.0, t90 = 0.0, cov = 0.0, total = 0.0, path = 0.0;
-    int n31 = 0, n90 = 0, n = 0, self_stopped = 0;
+    double cov = 0.0, total = 0.0, path = 0.0, t90 = 0.0;
+    int n = 0, n90 = 0;
     std::size_t collisions = 0;
-    for (const auto& r : runs) {
-      if (r["variant"].get<std::string>() != variant) continue;
+    for (const std::string& w : worlds) {
+      const nlohmann::json& m = j["per_world"][w][variant];
+      if (m["runs"].get<int>() == 0) continue;
       ++n;
-      cov += r["coverage"].get<double>();
-      total += r["sim_time_s"].get<double>();
-      path += r["path_length_m"].get<double>();
-      collisions += r["collisions"].get<std::size_t>();
-      self_stopped += r["stop_reason"].get<std::string>() == "explorer_done";
-      if (!r["t_31m2_s"].is_null()) {
-        t31 += r["t_31m2_s"].get<double>();
-        ++n31;
-      }
-      if (!r["t90_s"].is_null()) {
-        t90 += r["t90_s"].get<double>();
+      cov += m["coverage"].get<double>();
+      total += m["t_total_s"].get<double>();
+      path += m["path_length_m"].get<double>();
+      collisions += m["collisions"].get<std::size_t>();
+      if (!m["t90_s"].is_null()) {
+        t90 += m["t90_s"].get<double>();
         ++n90;
       }
     }
-    j["mean"][variant] = {{"runs", n},
-                          {"coverage", n ? cov / n : 0.0},
-                          {"collisions", collisions},
-                          {"runs_stopped_by_themselves", self_stopped},
-                          {"t_total_s", n ? total / n : 0.0},
-                          {"path_length_m", n ? path / n : 0.0},
-                          {"runs_reaching_31m2", n31},
-                          {"t_31m2_s", n31 ? nlohmann::json(t31 / n31) : nlohmann::json(nullptr)},
-                          {"runs_reaching_90pct", n90},
-                          {"t90_s", n90 ? nlohmann::json(t90 / n90) : nlohmann::json(nullptr)}};
+    j["mean_over_worlds"][variant] = {{"worlds", n},
+                                      {"coverage", n ? cov / n : 0.0},
+                                      {"collisions", collisions},
+                                      {"t_total_s", n ? total / n : 0.0},
+                                      {"path_length_m", n ? path / n : 0.0},
+                                      {"t90_worlds", n90},
+                                      {"t90_s", n90 ? nlohmann::json(t90 / n90) : nlohmann::json(nullptr)}};
+  }
+  // T_90 ratios on the worlds where every variant reached 90 % (the same worlds for all).
+  if (variants.size() > 1) {
+    std::vector<double> sum(variants.size(), 0.0);
+    int common = 0;
+    for (const std::string& w : worlds) {
+      bool all = true;
+      for (const std::string& v : variants) all = all && !j["per_world"][w][v]["t90_s"].is_null();
+      if (!all) continue;
+      ++common;
+      for (std::size_t k = 0; k < variants.size(); ++k) sum[k] += j["per_world"][w][variants[k]]["t90_s"].get<double>();
+    }
+    j["t90_ratio"]["worlds"] = common;
+    for (std::size_t k = 1; k < variants.size(); ++k)
+      j["t90_ratio"][variants[k] + " / " + variants[0]] = common && sum[0] > 0.0 ? nlohmann::json(sum[k] / sum[0]) : nlohmann::json(nullptr);
   }
   if (!interrupted.empty()) j["interrupted"] = interrupted;
   return j;
 }
 
+/// compare.md: the per-world table and the means over the worlds, in Markdown.
+std::string compare_markdown(const nlohmann::json& j, const std::vector<std::string>& worlds, const std::vector<std::string>& variants) {
+  auto num = [](const nlohmann::json& v, const char* fmt) {
+    if (v.is_null()) return std::string("-");
+    char b[64];
+    std::snprintf(b, sizeof b, fmt, v.get<double>());
+    return std::string(b);
+  };
+  std::string md = "| world | variant | runs | coverage | T_90 [s] | T_total [s] | path [m] | collisions | stopped by itself |\n"
+                   "|---|---|---|---|---|---|---|---|---|\n";
+  for (const std::string& w : worlds)
+    for (const std::string& v : variants) {
+      const nlohmann::json& m = j["per_world"][w][v];
+      md += "| " + w + " | " + v + " | " + std::to_string(m["runs"].get<int>()) + " | " + num(100.0 * m["coverage"].get<double>(), "%.1f %%") +
+            " | " + num(m["t90_s"], "%.0f") + " (" + std::to_string(m["runs_reaching_90pct"].get<int>()) + ")" + " | " +
+            num(m["t_total_s"], "%.0f") + " | " + num(m["path_length_m"], "%.0f") + " | " +
+            std::to_string(m["collisions"].get<std::size_t>()) + " | " + std::to_string(m["runs_stopped_by_themselves"].get<int>()) + " |\n";
+    }
+  if (worlds.size() > 1)
+    for (const std::string& v : variants) {
+      const nlohmann::json& m = j["mean_over_worlds"][v];
+      md += "| **mean over " + std::to_string(m["worlds"].get<int>()) + " worlds** | " + v + " | | " +
+            num(100.0 * m["coverage"].get<double>(), "%.1f %%") + " | " + num(m["t90_s"], "%.0f") + " (" +
+            std::to_string(m["t90_worlds"].get<int>()) + " worlds) | " + num(m["t_total_s"], "%.0f") + " | " +
+            num(m["path_length_m"], "%.0f") + " | " + std::to_string(m["collisions"].get<std::size_t>()) + " | |\n";
+    }
+  if (j.contains("t90_ratio")) {
+    md += "\nT_90 ratio over the " + std::to_string(j["t90_ratio"]["worlds"].get<int>()) + " worlds where every variant reached 90 %:";
+    for (const auto& [k, v] : j["t90_ratio"].items())
+      if (k != "worlds") md += " " + k + " = " + num(v, "%.2f") + ";";
+    md += "\n";
+  }
+  return md;
+}
+
 int run_compare(const CompareOptions& o) {
   if (o.seeds < 1 || o.seeds > 1000) fail(ErrorCode::kInvalidArgument, "--seeds must be in [1, 1000]");
-  const std::vector<std::string> profiles = split_list(o.profiles), strategies = split_list(o.strategies);
+  const std::vector<std::string> profiles = split_list(o.profiles), strategies = split_list(o.strategies), world_args = split_list(o.world);
   if (profiles.empty() || strategies.empty()) fail(ErrorCode::kInvalidArgument, "--profiles and --strategies must name at least one each");
+  if (world_args.empty()) fail(ErrorCode::kInvalidArgument, "--world must name at least one world");
   const std::vector<ProfileOverlay> over = overlays(o.configs, o.sets);
   for (const auto& st : strategies) {
     Profile probe = resolve_profile(profiles.front(), over);
     apply_strategy(probe, st);  // a bad name fails before any run
   }
+  std::vector<sim::World> worlds;  // every world loads before any run (a bad path fails at once)
+  std::vector<std::string> world_names;
+  for (const std::string& w : world_args) {
+    worlds.push_back(sim::resolve_world(w));
+    if (std::find(world_names.begin(), world_names.end(), worlds.back().name) != world_names.end())
+      fail(ErrorCode::kInvalidArgument, "--world names " + worlds.back().name + " twice");
+    world_names.push_back(worlds.back().name);
+  }
   const std::filesystem::path out(o.out);
   const StopSignals signals;  // SIGINT / SIGTERM from here on: stop the current run, save the runs so far, say so
   prepare_output_dir(out);  // before the runs, not after them
-  const sim::World world = sim::resolve_world(o.world);
   tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
   const bool tty = stderr_is_tty() && !o.quiet;
   nlohmann::json runs = nlohmann::json::array();
-  std::vector<PlotSeries> series;
+  std::vector<std::vector<PlotSeries>> series(worlds.size());
   std::vector<std::string> variants;
-  std::string csv = "variant,profile,strategy,seed,time_s,explored_area_m2,coverage\n";
+  for (const std::string& pname : profiles)
+    for (const std::string& strategy : strategies)
+      variants.push_back(strategies.size() == 1 ? pname : profiles.size() == 1 ? strategy : pname + "/" + strategy);
+  std::string csv = "world,variant,profile,strategy,seed,time_s,explored_area_m2,coverage\n";
   std::string interrupted;  // why the comparison stopped early ("" if it did not)
   int stopped_by = 0;
   static const Rgb8 kColours[] = {{30, 90, 200}, {220, 120, 20}, {40, 160, 60}, {180, 40, 160}, {120, 120, 120}, {200, 40, 40}};
   // The results so far, rewritten after every run (each file replaced whole): a comparison
   // stopped at any point - a signal, a kill, a crash - keeps every run it finished.
   auto write_results = [&] {
-    PlotOptions po;
-    po.title = "Time-area curves on " + world.name + " (" + std::to_string(o.seeds) + " seeds each)";
-    po.x_label = "time [s]";
-    po.y_label = "explored area [m^2]";
-    po.markers = paper_markers();
-    write_plot_png(out / "compare.png", series, po);
+    for (std::size_t w = 0; w < worlds.size(); ++w) {
+      if (worlds.size() > 1 && series[w].empty()) continue;  // a world not run yet
+      PlotOptions po;
+      po.title = "Time-area curves on " + world_names[w] + " (" + std::to_string(o.seeds) + " seeds each)";
+      po.x_label = "time [s]";
+      po.y_label = "explored area [m^2]";
+      po.markers = paper_markers();
+      write_plot_png(out / (worlds.size() == 1 ? std::string("compare.png") : "compare_" + world_names[w] + ".png"), series[w], po);
+    }
     write_text_file(out / "compare.csv", csv);
-    write_text_file(out / "compare.json", compare_json(world.name, runs, variants, interrupted).dump(2) + "\n");
+    const nlohmann::json j = compare_json(world_names, runs, variants, interrupted);
+    write_text_file(out / "compare.json", j.dump(2) + "\n");
+    write_text_file(out / "compare.md", compare_markdown(j, world_names, variants));
   };
   arena.execute([&] {
-    for (const std::string& pname : profiles)
-      for (const std::string& strategy : strategies) {
-        if (stopped_by) break;
-        const std::string variant = strategies.size() == 1 ? pname : profiles.size() == 1 ? strategy : pname + "/" + strategy;
-        const Rgb8 colour = kColours[variants.size() % std::size(kColours)];
-        variants.push_back(variant);
-        for (int k = 0; k < o.seeds && !stopped_by; ++k) {
-          const std::uint64_t seed = o.first_seed + static_cast<std::uint64_t>(k);
-          Profile profile = resolve_profile(pname, over);
-          apply_strategy(profile, strategy);
-          sim::ExploreSettings es = make_settings(profile, seed, o.max_time, 0.0);
-          sim::SimExplore run(world, std::move(profile), es);
-          stopped_by = run_to_end(run, o.quiet, tty, variant + " seed " + std::to_string(seed) + ": ", "the runs so far were saved");
-          if (stopped_by) interrupted = run.summary().stop_detail;
-          series.push_back(curve_series(run.curve(), k == 0 ? variant : "", colour, 2));
-          for (const auto& c : run.curve()) {
-            char buf[256];
-            std::snprintf(buf, sizeof buf, "%s,%s,%s,%llu,%.2f,%.3f,%.4f\n", variant.c_str(), pname.c_str(), strategy.c_str(),
-                          static_cast<unsigned long long>(seed), c.t_s, c.area_m2, c.coverage);
-            csv += buf;
+    for (std::size_t w = 0; w < worlds.size() && !stopped_by; ++w) {
+      std::size_t vi = 0;
+      for (const std::string& pname : profiles)
+        for (const std::string& strategy : strategies) {
+          const std::string& variant = variants[vi];
+          const Rgb8 colour = kColours[vi++ % std::size(kColours)];
+          for (int k = 0; k < o.seeds && !stopped_by; ++k) {
+            const std::uint64_t seed = o.first_seed + static_cast<std::uint64_t>(k);
+            Profile profile = resolve_profile(pname, over);
+            apply_strategy(profile, strategy);
+            sim::ExploreSettings es = make_settings(profile, seed, o.max_time, 0.0);
+            sim::SimExplore run(worlds[w], std::move(profile), es);
+            const std::string label = (worlds.size() > 1 ? world_names[w] + " " : std::string()) + variant + " seed " + std::to_string(seed) + ": ";
+            stopped_by = run_to_end(run, o.quiet, tty, label, "the runs so far were saved");
+            if (stopped_by) interrupted = run.summary().stop_detail;
+            series[w].push_back(curve_series(run.curve(), k == 0 ? variant : "", colour, 2));
+            for (const auto& c : run.curve()) {
+              char buf[320];
+              std::snprintf(buf, sizeof buf, "%s,%s,%s,%s,%llu,%.2f,%.3f,%.4f\n", world_names[w].c_str(), variant.c_str(), pname.c_str(),
+                            strategy.c_str(), static_cast<unsigned long long>(seed), c.t_s, c.area_m2, c.coverage);
+              csv += buf;
+            }
+            nlohmann::json r = to_json(run.summary());
+            r["variant"] = variant;
+            r["strategy"] = strategy;
+            runs.push_back(std::move(r));
+            write_results();
           }
-          nlohmann::json r = to_json(run.summary());
-          r["variant"] = variant;
-          r["strategy"] = strategy;
-          runs.push_back(std::move(r));
-          write_results();
+          if (stopped_by) break;
         }
-      }
+    }
   });
   if (runs.empty()) write_results();
   if (!o.quiet || stopped_by) {
-    const nlohmann::json j = compare_json(world.name, runs, variants, interrupted);
-    std::fprintf(stderr, "duet compare: %s%swrote %s/{compare.png, compare.csv, compare.json}\n%s\n", interrupted.c_str(),
-                 interrupted.empty() ? "" : "; ", o.out.c_str(), j["mean"].dump(2).c_str());
+    const nlohmann::json j = compare_json(world_names, runs, variants, interrupted);
+    std::fprintf(stderr, "duet compare: %s%swrote %s/{compare.png, compare.csv, compare.json, compare.md}\n%s", interrupted.c_str(),
+                 interrupted.empty() ? "" : "; ", o.out.c_str(), compare_markdown(j, world_names, variants).c_str());
   }
   return stopped_by ? StopSignals::exit_code(stopped_by) : 0;
 }
@@ -402,7 +508,10 @@ void add_compare_command(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<CompareOptions>();
   auto* cmd = app.add_subcommand("compare",
                                  "Explore with several profiles and goal selection strategies over several seeds; plot the curves (Fig. 10)");
-  cmd->add_option("-w,--world", o->world, "a built-in world (lab), a world YAML or a map_server map YAML")->capture_default_str();
+  cmd->add_option("-w,--world", o->world,
+                  "comma-separated worlds: built-in (lab), world YAMLs or map_server map YAMLs (each from its own start: a map's "
+                  "NAME.start when present); with several, compare.md has a row per world and the means over the worlds")
+      ->capture_default_str();
   cmd->add_option("--profiles", o->profiles, "comma-separated profiles (built-in names or YAML files)")->capture_default_str();
   cmd->add_option("--strategies", o->strategies, "comma-separated strategies: paper, nearest_frontier, explore_lite, profile")
       ->capture_default_str();

@@ -23,6 +23,7 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
   j["stop_reason"] = sim::to_string(s.stop_reason);
   j["explorer_status"] = s.explorer_status;
   j["stop_detail"] = s.stop_detail;
+  j["left_unexplored"] = left_json(s.left);
   j["explorer_state"] = s.explorer_state;
   j["sim_time_s"] = s.sim_time_s;
   j["wall_time_s"] = s.wall_time_s;
@@ -79,6 +80,7 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                {"scan_matches", s.scan_matches},
                {"scan_match_rejected", s.scan_match_rejected},
                {"relocalizations_held", s.relocalizations_held},
+               {"relocalizations_new_space", s.relocalizations_new_space},
                {"relocalizations_asked", s.relocalizations_asked},
                {"scan_match_time_s", s.scan_match_time_s}};
   if (s.visual_odometry)

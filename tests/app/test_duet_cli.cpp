@@ -287,7 +287,10 @@ TEST(DuetCli, CompareRunsBothProfilesAndPlotsThem) {
   EXPECT_EQ(j["runs"][1]["profile"], "single_kinect_kobuki");
   EXPECT_EQ(j["mean"]["dual"]["runs"], 1);
   EXPECT_EQ(j["mean"]["single"]["runs"], 1);
+  EXPECT_EQ(j["world"], "room");
+  EXPECT_TRUE(fs::exists(dir / "out" / "compare.md"));
 }
+
 
 // `duet run`: the robot loop on a source by name; the simulator is one source among others.
 TEST(DuetCli, RunsTheLoopOnARobotSourceByName) {
@@ -481,3 +484,42 @@ TEST(DuetReplay, AFolderThatIsNeitherIsAnError) {
 }
 
 }  // namespace
+
+// Several worlds: a row per world and variant, the means over the worlds (each world weighs the
+// same), the T_90 ratio, one plot per world; a world named twice or missing is an error.
+TEST(DuetCli, CompareAcrossWorldsTabulatesEachAndTheirMean) {
+  const fs::path dir = temp_dir("compare_worlds");
+  const fs::path a = write_file(dir, "room.yaml", kRoomWorld);
+  std::string other = kRoomWorld;
+  other.replace(other.find("name: room"), 10, "name: hall");
+  other.replace(other.find("[4.2, 3.2]"), 10, "[5.2, 3.2]");
+  other.replace(other.find("[4.15, 0.05], [4.15, 3.15]"), 26, "[5.15, 0.05], [5.15, 3.15]");
+  const fs::path b = write_file(dir, "hall.yaml", other);
+  const CliRun r = run("compare -q --world " + a.string() + "," + b.string() + " --profiles dual --strategies paper,nearest_frontier --seeds 1 --max-time 40 --out " +
+                       (dir / "out").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto j = nlohmann::json::parse(std::ifstream(dir / "out" / "compare.json"));
+  ASSERT_EQ(j["runs"].size(), 4u);
+  EXPECT_EQ(j["worlds"], nlohmann::json::array({"room", "hall"}));
+  EXPECT_TRUE(j["world"].is_null());
+  for (const char* w : {"room", "hall"})
+    for (const char* v : {"paper", "nearest_frontier"}) EXPECT_EQ(j["per_world"][w][v]["runs"], 1) << w << " " << v;
+  const double mean_cov = j["mean_over_worlds"]["paper"]["coverage"].get<double>();
+  EXPECT_NEAR(mean_cov, 0.5 * (j["per_world"]["room"]["paper"]["coverage"].get<double>() + j["per_world"]["hall"]["paper"]["coverage"].get<double>()), 1e-12);
+  EXPECT_EQ(j["mean_over_worlds"]["paper"]["worlds"], 2);
+  ASSERT_TRUE(j.contains("t90_ratio"));
+  EXPECT_TRUE(j["t90_ratio"].contains("nearest_frontier / paper"));
+  for (const char* f : {"compare_room.png", "compare_hall.png", "compare.csv", "compare.md"}) EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
+  const std::string md = slurp_text(dir / "out" / "compare.md");
+  EXPECT_NE(md.find("| room | paper |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| hall | nearest_frontier |"), std::string::npos) << md;
+  EXPECT_NE(md.find("mean over 2 worlds"), std::string::npos) << md;
+  EXPECT_NE(slurp_text(dir / "out" / "compare.csv").find("hall,nearest_frontier,dual,nearest_frontier,1,"), std::string::npos);
+  CliRun bad = run("compare -q --world " + a.string() + "," + a.string() + " --seeds 1 --max-time 5 --out " + (dir / "o2").string());
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.output.find("names room twice"), std::string::npos) << bad.output;
+  bad = run("compare -q --world " + a.string() + "," + (dir / "none.yaml").string() + " --seeds 1 --max-time 5 --out " + (dir / "o3").string());
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.output.find("none.yaml"), std::string::npos) << bad.output;
+  EXPECT_FALSE(fs::exists(dir / "o3" / "compare.json"));
+}

@@ -125,6 +125,11 @@ SimChassis::SimChassis(std::shared_ptr<const World> world, const ChassisSimSetti
   }
 }
 
+void SimChassis::set_world(std::shared_ptr<const World> world) {
+  if (!world) fail(ErrorCode::kInvalidArgument, "SimChassis::set_world: world is null");
+  world_ = std::move(world);
+}
+
 double SimChassis::normal() { return standard_normal(rng_); }
 
 bool SimChassis::collides_at(const Pose2& p, float extra_radius) const {

@@ -87,7 +87,9 @@ SimExplore::SimExplore(World world, Profile profile, ExploreSettings settings)
   }
   runtime_ = std::make_unique<ExplorationRuntime>(profile_, source().chassis(), source().sensors(), runtime_settings(settings_));
   dt_ = 1.0 / settings_.runtime.control_rate_hz;
-  truth_ = rasterize(*world_, settings_.coverage_resolution_m, 0.0f, 0.6f);
+  // Scored with every door open: what is behind a door counts as reachable (the run is judged
+  // on finding it once it opens).
+  truth_ = rasterize(with_doors_open(*world_), settings_.coverage_resolution_m, 0.0f, 0.6f);
   float range = 0.0f;
   for (const auto& s : profile_.sensors) range = std::max(range, s.max_depth_m);
   reachable_ = reachable_free_mask(truth_, world_->start, profile_.exploration.inflation.robot_radius_m, range);
@@ -288,6 +290,7 @@ ExploreSummary SimExplore::summary() const {
   if (runtime_->state() == ExplorerState::kDone) s.explorer_status = duet::to_string(runtime_->stop_status());
   s.stop_detail = reason_ == StopReason::kInterrupted ? interrupt_detail_ : runtime_->stop_detail();
   s.explorer_state = duet::to_string(runtime_->state());
+  s.left = runtime_->left_unexplored();
   s.sim_time_s = t_;
   s.wall_time_s = wall_elapsed_;
   const CurvePoint p = measure();
@@ -336,6 +339,7 @@ ExploreSummary SimExplore::summary() const {
   s.blind_holds = rs.blind_holds;
   s.relocalizations = rs.relocalizations;
   s.relocalizations_held = rs.relocalizations_held;
+  s.relocalizations_new_space = rs.relocalizations_new_space;
   s.relocalizations_asked = rs.relocalizations_asked;
   s.occupied_on_obstacles = occupied_on_obstacles();
   return s;

@@ -58,7 +58,9 @@ void SimRgbdSensor::recycle(RgbdImage&& image) {
 }
 
 SimRobot::SimRobot(std::shared_ptr<const World> world, const Profile& profile, const SimRobotSettings& settings)
-    : renderer_((world ? void() : fail(ErrorCode::kInvalidArgument, "SimRobot: no world"), *world), settings.render),
+    : world_((world ? void() : fail(ErrorCode::kInvalidArgument, "SimRobot: no world"), world)),
+      render_(settings.render),
+      renderer_(*world_, settings.render),
       chassis_(world, chassis_settings(profile, settings), world->start, ChassisBody::from_profile(profile.chassis)) {
   for (std::size_t i = 0; i < profile.sensors.size(); ++i) {
     sensors_.push_back(std::make_unique<SimRgbdSensor>(renderer_, chassis_, profile.sensors[i], settings.sensor_rate_hz,
@@ -67,8 +69,27 @@ SimRobot::SimRobot(std::shared_ptr<const World> world, const Profile& profile, c
   }
 }
 
+bool SimRobot::open_door(const std::string& name) {
+  const bool closed = std::any_of(world_->solids.begin(), world_->solids.end(), [&](const Solid& s) { return s.door && s.name == name; });
+  if (!closed) return false;
+  const std::string names[] = {name};
+  rebuild(std::make_shared<const World>(with_doors_open(*world_, names)));
+  return true;
+}
+
+void SimRobot::rebuild(std::shared_ptr<const World> world) {
+  renderer_ = RgbdRenderer(*world, render_);  // the sensors keep their reference to renderer_
+  chassis_.set_world(world);
+  world_ = std::move(world);
+}
+
 void SimRobot::advance(double now_s) {
   if (!(now_s >= t_)) fail(ErrorCode::kInvalidArgument, "SimRobot::advance: time " + std::to_string(now_s) + " s is before " + std::to_string(t_) + " s");
+  // Doors whose time has come open before the period (at most one rebuild per period).
+  std::vector<std::string> due;
+  for (const Solid& s : world_->solids)
+    if (s.door && s.opens_at_s <= now_s) due.push_back(s.name);
+  if (!due.empty()) rebuild(std::make_shared<const World>(with_doors_open(*world_, due)));
   double t_chassis = t_;
   for (;;) {
     double next = now_s;

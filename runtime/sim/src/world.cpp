@@ -45,6 +45,7 @@ constexpr Range kSize{0.0, 1e5, true, false, "m"};
 constexpr Range kTextureScale{0.001, 10.0, true, false, "m"};
 constexpr Range kColour{0.0, 255.0, false, false, ""};
 constexpr Range kYaw{-360.0, 360.0, false, false, "deg"};
+constexpr Range kOpensAt{0.0, 1e6, false, false, "s"};
 constexpr std::size_t kMaxSolids = 1u << 22;
 
 double signed_area(const std::vector<Eigen::Vector2f>& p) {
@@ -272,7 +273,8 @@ World parse_root(Reader& r, Locator& loc, const YAML::Node& root, const std::str
     }
   });
   for_each_item("boxes", [&](const YAML::Node& n, const std::string& path) {
-    MapReader bm(r, n, path, {"name", "centre", "center", "min", "max", "size", "yaw_deg", "z_m", "height_m", "surface"});
+    MapReader bm(r, n, path,
+                 {"name", "centre", "center", "min", "max", "size", "yaw_deg", "z_m", "height_m", "surface", "door", "opens_at_s"});
     std::string name;
     bm.opt_string("name", name);
     Eigen::Vector2f c, size;
@@ -306,6 +308,16 @@ World parse_root(Reader& r, Locator& loc, const YAML::Node& root, const std::str
     const Eigen::Vector2f ax(std::cos(yaw), std::sin(yaw)), ay(-std::sin(yaw), std::cos(yaw));
     const Eigen::Vector2f hx = 0.5f * size.x() * ax, hy = 0.5f * size.y() * ay;
     s.polygon = {c - hx - hy, c + hx - hy, c + hx + hy, c - hx + hy};
+    // A door: `opens_at_s` (simulated time) or `door: true` (opened by the caller).
+    bm.opt_bool("door", s.door);
+    if (bm.get("opens_at_s")) {
+      float t = 0.0f;
+      bm.opt_real("opens_at_s", t);
+      r.range(bm.get("opens_at_s"), bm.path_of("opens_at_s"), t, kOpensAt);
+      if (bm.get("door") && !s.door) r.parse_error(n, path, "opens_at_s goes with a door (door: false given)");
+      s.door = true;
+      s.opens_at_s = t;
+    }
     world.solids.push_back(std::move(s));
   });
   for_each_item("polygons", [&](const YAML::Node& n, const std::string& path) {
@@ -326,6 +338,14 @@ World parse_root(Reader& r, Locator& loc, const YAML::Node& root, const std::str
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
+
+World with_doors_open(const World& world, std::span<const std::string> names) {
+  World out = world;
+  std::erase_if(out.solids, [&](const Solid& s) {
+    return s.door && (names.empty() || std::find(names.begin(), names.end(), s.name) != names.end());
+  });
+  return out;
+}
 
 void validate(World& world, std::string_view source_name) {
   const std::string src(source_name);
@@ -351,6 +371,8 @@ void validate(World& world, std::string_view source_name) {
     if (!(std::isfinite(s.z_min_m) && std::isfinite(s.z_max_m) && s.z_max_m > s.z_min_m))
       bad(name + ": z_max must be above z_min, got [" + format_number(s.z_min_m) + ", " + format_number(s.z_max_m) + "]");
     check_surface(s.surface, name + ".surface");
+    if (std::isnan(s.opens_at_s) || s.opens_at_s < 0.0) bad(name + ": opens_at_s must be >= 0 (+inf: opened by the caller), got " + format_number(s.opens_at_s));
+    if (!s.door && std::isfinite(s.opens_at_s)) bad(name + ": opens_at_s is set but the solid is not a door");
     const double area = signed_area(s.polygon);
     if (!(std::fabs(area) > 1e-10)) bad(name + ": the polygon has zero area");
     const std::size_t n = s.polygon.size();

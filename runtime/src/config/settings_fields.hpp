@@ -78,6 +78,7 @@ void fields(V& v, PoseCorrectionSettings& s) {
   v("relocalize_step_m", s.relocalize_step_m);
   v("relocalize_step_deg", s.relocalize_step_deg);
   v("relocalize_min_gain", s.relocalize_min_gain);
+  v("relocalize_min_conflict", s.relocalize_min_conflict);
   v.section("match", [&](auto& w) { fields(w, s.match); });
 }
 
@@ -136,6 +137,9 @@ void goal_fields(V& v, ExplorerSettings& s) {
   v("view_range_m", s.view_range_m);
   v("view_min_range_m", s.view_min_range_m);
   v("view_rays", s.view_rays);
+  v("view_looks", s.view_looks);
+  v("view_relook_after_s", s.view_relook_after_s);
+  v("view_relook_dwell_s", s.view_relook_dwell_s);
   v("recent_obstacles_s", s.recent_obstacles_s);
   v("recent_obstacle_range_m", s.recent_obstacle_range_m);
   v("recent_obstacle_min_scans", s.recent_obstacle_min_scans);

@@ -1,6 +1,8 @@
 // summary.json's shared blocks (see run_json.hpp).
 #include "io/run_json.hpp"
 
+#include <cmath>
+
 namespace duet::detail {
 
 nlohmann::json timing_json(const RuntimeTiming& tm) {
@@ -31,6 +33,25 @@ nlohmann::json input_json(const InputStats& in, std::uint64_t sets_with_missing,
           {"sets_with_missing_frames", sets_with_missing},
           {"blind_hold_periods", blind_holds},
           {"relocalizations", relocalizations}};
+}
+
+nlohmann::json left_json(const std::vector<UnexploredRegion>& left) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const UnexploredRegion& r : left) {
+    nlohmann::json o{{"x_m", r.centroid.x()},
+                     {"y_m", r.centroid.y()},
+                     {"nearest_x_m", r.nearest.x()},
+                     {"nearest_y_m", r.nearest.y()},
+                     {"frontier_cells", r.cells},
+                     {"length_m", r.length_m},
+                     {"why", to_string(r.why)},
+                     {"failed_goals", r.failures},
+                     {"looked_at", r.looked_at},
+                     {"needed_m", r.needed_m}};
+    o["gap_m"] = std::isfinite(r.gap_m) ? nlohmann::json(r.gap_m) : nlohmann::json(nullptr);  // null: no obstacle at all
+    a.push_back(std::move(o));
+  }
+  return a;
 }
 
 }  // namespace duet::detail

@@ -14,4 +14,7 @@ namespace duet::detail {
 [[nodiscard]] nlohmann::json input_json(const InputStats& input, std::uint64_t sets_with_missing, std::uint64_t blind_holds,
                                         std::size_t relocalizations);
 
+/// What the explorer left unexplored (unexplored.hpp): one object per region, largest first.
+[[nodiscard]] nlohmann::json left_json(const std::vector<UnexploredRegion>& left);
+
 }  // namespace duet::detail

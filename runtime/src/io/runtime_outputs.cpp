@@ -36,6 +36,7 @@ RuntimeOutputs snapshot_runtime_outputs(ExplorationRuntime& rt, const Trajectory
   j["control_periods"] = trajectory.size();
   j["explorer_state"] = to_string(rt.state());
   j["stop_detail"] = rt.stop_detail();
+  j["left_unexplored"] = detail::left_json(rt.left_unexplored());
   j["execution"] = to_string(rt.settings().execution);
   j["sets_integrated"] = st.sets_integrated;
   j["scan_matches"] = st.scan_matches;
@@ -43,6 +44,7 @@ RuntimeOutputs snapshot_runtime_outputs(ExplorationRuntime& rt, const Trajectory
   j["loop_closures"] = st.loop_closures;
   j["relocalizations"] = st.relocalizations;
   j["relocalizations_held"] = st.relocalizations_held;
+  j["relocalizations_new_space"] = st.relocalizations_new_space;
   j["relocalizations_asked"] = st.relocalizations_asked;
   j["frames_received"] = st.frames_received;
   j["frame_drops"] = st.frame_drops;

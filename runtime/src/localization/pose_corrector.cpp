@@ -35,6 +35,8 @@ void validate(const PoseCorrectionSettings& s) {
   if (!in(s.relocalize_step_m, 0.0f, 1.0f)) bad("relocalize_step_m must be in (0, 1] m, got " + std::to_string(s.relocalize_step_m));
   if (!in(s.relocalize_step_deg, 0.0f, 10.0f)) bad("relocalize_step_deg must be in (0, 10] deg, got " + std::to_string(s.relocalize_step_deg));
   if (!in(s.relocalize_min_gain, 0.0f, 1.0f)) bad("relocalize_min_gain must be in (0, 1], got " + std::to_string(s.relocalize_min_gain));
+  if (!(s.relocalize_min_conflict >= 0.0f && s.relocalize_min_conflict <= 1.0f))
+    bad("relocalize_min_conflict must be in [0, 1], got " + std::to_string(s.relocalize_min_conflict));
 }
 
 PoseCorrector::PoseCorrector(const Profile& profile, const PoseCorrectionSettings& settings) : profile_(profile), settings_(settings) {
@@ -68,6 +70,18 @@ void PoseCorrector::scan_from(const CameraPoints& points, std::span<const Sensor
       scan_cloud_.push_back(R * src->cloud.points[k] + t);
     }
   }
+}
+
+float PoseCorrector::free_conflict(const OccupancyGrid& grid, const Pose2& pose) const {
+  if (scan_points_.empty() || grid.width() <= 0 || grid.height() <= 0) return 0.0f;
+  const float c = std::cos(pose.theta), s = std::sin(pose.theta);
+  std::size_t on_free = 0;
+  for (const Eigen::Vector2f& p : scan_points_) {
+    const Eigen::Vector2f w(pose.x + c * p.x() - s * p.y(), pose.y + s * p.x() + c * p.y());
+    const Eigen::Vector2i k = grid.cell_of(w);
+    if (grid.in_bounds(k.x(), k.y()) && classify(grid.at(k.x(), k.y()), profile_.exploration.cells) == CellState::kFree) ++on_free;
+  }
+  return static_cast<float>(on_free) / static_cast<float>(scan_points_.size());
 }
 
 Pose2 PoseCorrector::update(std::span<const SensorFrame> frames, const Pose2& odom, const OccupancyGrid& grid, double t) {
@@ -144,7 +158,12 @@ Pose2 PoseCorrector::update(const CameraPoints& points, std::span<const SensorFr
     const bool asked = relocalize_asked_ && pc.relocalize_after > 0 && pc.reference_age_s <= 0.0;
     relocalize_asked_ = false;
     if (asked) ++relocalizations_asked_;
-    const bool wide_due = pc.relocalize_after > 0 && pc.reference_age_s <= 0.0 && (recent >= pc.relocalize_after || lost || asked);
+    bool wide_due = pc.relocalize_after > 0 && pc.reference_age_s <= 0.0 && (recent >= pc.relocalize_after || lost || asked);
+    if (wide_due) last_conflict_ = free_conflict(grid, prior);
+    if (wide_due && !asked && pc.relocalize_min_conflict > 0.0f && last_conflict_ < pc.relocalize_min_conflict) {
+      wide_due = false;  // the scan sees new space, not a map it contradicts
+      ++relocalizations_new_space_;
+    }
     if (wide_due && odometry_confirmed_ && !asked) {
       suspect_ = 0;
       ++relocalizations_held_;

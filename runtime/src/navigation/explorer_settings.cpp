@@ -58,6 +58,12 @@ void validate(const ExplorerSettings& s) {
                                           "] m (view_range_m, or 10 with no view goals), got " + std::to_string(s.view_min_range_m));
   if (s.view_rays < 4 || s.view_rays > 3600)
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_rays must be in [4, 3600], got " + std::to_string(s.view_rays));
+  if (s.view_looks < 1 || s.view_looks > 100)
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_looks must be in [1, 100], got " + std::to_string(s.view_looks));
+  if (!(s.view_relook_after_s >= 0.0f && s.view_relook_after_s <= 1e5f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_relook_after_s must be in [0, 1e5] s, got " + std::to_string(s.view_relook_after_s));
+  if (!(s.view_relook_dwell_s >= 0.0f && s.view_relook_dwell_s <= 600.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_relook_dwell_s must be in [0, 600] s, got " + std::to_string(s.view_relook_dwell_s));
   if (!(s.recent_obstacles_s >= 0.0f && s.recent_obstacles_s <= 3600.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::recent_obstacles_s must be in [0, 3600] s, got " + std::to_string(s.recent_obstacles_s));
   if (!(s.recent_obstacle_range_m > 0.0f && s.recent_obstacle_range_m <= 10.0f))

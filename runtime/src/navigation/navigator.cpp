@@ -91,6 +91,7 @@ NavSnapshot Navigator::snapshot() const {
   static_cast<NavPlanState&>(s) = plan_state();
   s.stop_status = stop_status_;
   s.stop_detail = stop_detail_;
+  s.left = left_;
   s.goal = goal_;
   s.path = path_;
   s.local = local_grid();
@@ -146,6 +147,11 @@ void Navigator::shift(const Pose2& D) {
   local_costmap_.shift(D);
   for (const auto& st : strategies_) st->shift(D);
   for (Eigen::Vector2f& p : patrol_) move(p);
+  for (GoalFailures& f : failures_) move(f.xy);
+  for (UnexploredRegion& r : left_) {
+    move(r.centroid);
+    move(r.nearest);
+  }
   if (goal_) goal_ = compose(D, *goal_);
 }
 
@@ -269,6 +275,13 @@ void Navigator::abandon_goal(int& counter, double now_s) {
     patrol_goal_ended(false);
     return;
   }
+  if (goal_) {  // counted per place for the report of what was left (unexplored.hpp)
+    const float r = profile_.exploration.strategy.frontier.blacklist_radius_m;
+    auto same = std::find_if(failures_.begin(), failures_.end(),
+                             [&](const GoalFailures& f) { return (f.xy - goal_target_).squaredNorm() <= r * r; });
+    if (same != failures_.end()) ++same->count;
+    else failures_.push_back(GoalFailures{goal_target_, 1});
+  }
   // The strategy it came from decides what is not tried again (for a while, or for good).
   if (GoalStrategy* by = goal_ ? active() : nullptr) by->goal_ended(GoalEnd{false, now_s, goal_target_, decision_, blacklist_, stats_});
   drop_goal();
@@ -338,7 +351,7 @@ void Navigator::decide(const Pose2& robot, double now_s) {
     if (q.retry) continue;
     if (!proposal) {
       wait_for_map_ = true;
-      if (++no_goal_decisions_ > settings_.final_retries) finish(robot, now_s);
+      if (!q.later && ++no_goal_decisions_ > settings_.final_retries) finish(robot, now_s);
       return;
     }
     goal_ = proposal->goal;
@@ -375,6 +388,20 @@ void Navigator::finish(const Pose2& robot, double now_s) {
       break;
     case ExplorationStatus::kRobotBlocked: stop_detail_ = "gave up: the robot is blocked (no traversable cell around it)"; break;
     default: stop_detail_ = std::string("stopped: ") + to_string(stop_status_); break;
+  }
+  // What is left, where and why; the frontier points are those of this decision's search.
+  left_.clear();
+  if (stop_status_ != ExplorationStatus::kNoFrontier && decision_.frontier_searched) {
+    UnexploredSettings us;
+    us.blacklist_radius_m = profile_.exploration.strategy.frontier.blacklist_radius_m;
+    us.approach_radius_m = profile_.exploration.strategy.frontier.approach_radius_m;
+    std::vector<Eigen::Vector2f> looked;  // stood at (blacklisted for good) or looked at from a view goal
+    for (const GoalBlacklist::Entry& e : blacklist_.entries())
+      if (std::isinf(e.expiry_s)) looked.push_back(e.xy);
+    for (const auto& st : strategies_)
+      for (const Eigen::Vector2f& p : st->looked_at()) looked.push_back(p);
+    left_ = find_unexplored(inflated(), Eigen::Vector2f(robot.x, robot.y), frontier_xy_, failures_, looked, us);
+    if (!left_.empty()) stop_detail_ += " - " + describe(left_);
   }
   if (settings_.on_done == OnDone::kPatrol && !trail_->points().empty()) {
     start_patrol(robot, now_s);

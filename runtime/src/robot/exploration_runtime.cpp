@@ -87,9 +87,10 @@ struct ExplorationRuntime::Result {
   std::optional<Pose2> shift;
   std::vector<RgbdImage> images;          ///< to recycle on the control thread
   std::size_t scan_matches = 0, scan_match_rejected = 0, loop_closures = 0;
-  std::size_t relocalizations = 0, relocalizations_held = 0, relocalizations_asked = 0;
+  std::size_t relocalizations = 0, relocalizations_held = 0, relocalizations_asked = 0, relocalizations_new_space = 0;
   Pose2 relocalization;
   std::pair<float, float> relocalization_scores{0.0f, 0.0f};
+  float relocalization_conflict = 0.0f;
   double now_s = 0.0;
   double scan_match_time_s = 0.0;
   double frame_to_map_s = 0.0;
@@ -204,6 +205,11 @@ std::string ExplorationRuntime::stop_detail() const {
   if (!worker_) return explorer_.stop_detail();
   if (stop_asked_ && !(plan_ && plan_->state == ExplorerState::kDone)) return stop_why_;
   return plan_ ? plan_->stop_detail : std::string();
+}
+
+std::vector<UnexploredRegion> ExplorationRuntime::left_unexplored() const {
+  if (!worker_) return explorer_.left_unexplored();
+  return plan_ ? plan_->left : std::vector<UnexploredRegion>{};
 }
 
 void ExplorationRuntime::return_home(double now_s) {
@@ -372,8 +378,10 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
     stats_.scan_matches = corrector_.matches();
     stats_.scan_match_rejected = corrector_.rejected();
     stats_.relocalizations_held = corrector_.relocalizations_held();
+    stats_.relocalizations_new_space = corrector_.relocalizations_new_space();
     stats_.relocalizations_asked = corrector_.relocalizations_asked();
-    note_relocalization(corrector_.relocalizations(), corrector_.last_relocalization(), corrector_.last_relocalization_scores(), now_s);
+    note_relocalization(corrector_.relocalizations(), corrector_.last_relocalization(), corrector_.last_relocalization_scores(),
+                        corrector_.last_conflict(), now_s);
     stats_.scan_match_time_s = corrector_.time_s();
     ++stats_.sets_integrated;
   } else {
@@ -398,11 +406,13 @@ void ExplorationRuntime::submit_map_update(MapInput&& input) {
     r.scan_matches = corrector_.matches();
     r.scan_match_rejected = corrector_.rejected();
     r.relocalizations_held = corrector_.relocalizations_held();
+    r.relocalizations_new_space = corrector_.relocalizations_new_space();
     r.relocalizations_asked = corrector_.relocalizations_asked();
     r.scan_match_time_s = corrector_.time_s();
     r.relocalizations = corrector_.relocalizations();
     r.relocalization = corrector_.last_relocalization();
     r.relocalization_scores = corrector_.last_relocalization_scores();
+    r.relocalization_conflict = corrector_.last_conflict();
     r.now_s = in->now_s;
     r.images = std::move(in->images);
     r.done_wall_s = wall_s();
@@ -475,9 +485,10 @@ void ExplorationRuntime::take_results() {
       stats_.scan_matches = r.scan_matches;
       stats_.scan_match_rejected = r.scan_match_rejected;
       stats_.relocalizations_held = r.relocalizations_held;
+      stats_.relocalizations_new_space = r.relocalizations_new_space;
       stats_.relocalizations_asked = r.relocalizations_asked;
       stats_.scan_match_time_s = r.scan_match_time_s;
-      note_relocalization(r.relocalizations, r.relocalization, r.relocalization_scores, r.now_s);
+      note_relocalization(r.relocalizations, r.relocalization, r.relocalization_scores, r.relocalization_conflict, r.now_s);
       grid_copy_ = std::move(r.grid);
       frame_to_map_.add(r.frame_to_map_s);
       link_->map_seen();
@@ -554,14 +565,16 @@ void ExplorationRuntime::tick(double now_s) {
   command_.add(wall_s() - w0);
 }
 
-void ExplorationRuntime::note_relocalization(std::size_t count, const Pose2& offset, std::pair<float, float> scores, double now_s) {
+void ExplorationRuntime::note_relocalization(std::size_t count, const Pose2& offset, std::pair<float, float> scores, float conflict,
+                                             double now_s) {
   if (count == stats_.relocalizations) return;
   stats_.relocalizations = count;
   char buf[256];
   std::snprintf(buf, sizeof buf,
-                "the scan matched %.3f m / %.1f deg from the odometry's prediction (score %.2f there, %.2f at the prediction), "
-                "beyond the matcher's window: relocalised",
-                std::hypot(offset.x, offset.y), offset.theta * 180.0f / std::numbers::pi_v<float>, scores.first, scores.second);
+                "the scan matched %.3f m / %.1f deg from the odometry's prediction (score %.2f there, %.2f at the prediction; "
+                "%.0f %% of it on cells the map holds free at the prediction), beyond the matcher's window: relocalised",
+                std::hypot(offset.x, offset.y), offset.theta * 180.0f / std::numbers::pi_v<float>, scores.first, scores.second,
+                100.0f * conflict);
   guard_.note(now_s, buf);
 }
 

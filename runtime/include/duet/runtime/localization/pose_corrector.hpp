@@ -66,6 +66,11 @@ class PoseCorrector {
   [[nodiscard]] const Pose2& last_relocalization() const noexcept { return last_relocalization_; }
   /// Wide re-matches not tried because the odometry was confirmed (confirm_odometry).
   [[nodiscard]] std::size_t relocalizations_held() const noexcept { return relocalizations_held_; }
+  /// Wide re-matches not tried because the scan saw new space (relocalize_min_conflict).
+  [[nodiscard]] std::size_t relocalizations_new_space() const noexcept { return relocalizations_new_space_; }
+  /// The share of the scan's points on cells the map holds as free, at the prediction of the
+  /// last update a wide re-match was due (relocalize_min_conflict), [0, 1].
+  [[nodiscard]] float last_conflict() const noexcept { return last_conflict_; }
   /// Wide re-matches tried because another sensor contradicted the odometry (contradict_odometry).
   [[nodiscard]] std::size_t relocalizations_asked() const noexcept { return relocalizations_asked_; }
   /// The last relocalisation's mean scan score at the new pose and at the prediction, [0, 1].
@@ -73,12 +78,17 @@ class PoseCorrector {
   [[nodiscard]] double time_s() const noexcept { return time_s_; }  ///< wall time spent [s]
 
  private:
+  /// Share of scan_points_ that fall, at `pose`, on cells `grid` holds as free, [0, 1].
+  [[nodiscard]] float free_conflict(const OccupancyGrid& grid, const Pose2& pose) const;
+
   Profile profile_;
   PoseCorrectionSettings settings_;
   Pose2 correction_;
   float heading_rate_ = 0.0f;
   double last_match_t_ = -1.0;
   std::size_t rate_updates_ = 0;
+  std::size_t relocalizations_new_space_ = 0;
+  float last_conflict_ = 0.0f;  ///< wide matches due but not tried: the scan saw new space
   /// The matcher's points of the frames (robot frame): pixel_step's lattice of `points`.
   void scan_from(const CameraPoints& points, std::span<const SensorFrame> frames);
   CameraPoints own_points_;             ///< when the caller's were sampled on another lattice

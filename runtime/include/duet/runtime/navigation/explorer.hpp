@@ -34,6 +34,8 @@ class Explorer {
   [[nodiscard]] ExplorationStatus stop_status() const noexcept { return navigator_.stop_status(); }
   /// Why exploration stopped, in words (Navigator::stop_detail()).
   [[nodiscard]] const std::string& stop_detail() const noexcept { return navigator_.stop_detail(); }
+  /// What was left unexplored, where and why (Navigator::left_unexplored()).
+  [[nodiscard]] const std::vector<UnexploredRegion>& left_unexplored() const noexcept { return navigator_.left_unexplored(); }
   /// The navigator's and the controller's counters together.
   [[nodiscard]] ExplorerStats stats() const;
   [[nodiscard]] const std::optional<Pose2>& goal() const noexcept { return navigator_.goal(); }

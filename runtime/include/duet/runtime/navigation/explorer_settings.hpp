@@ -60,6 +60,19 @@ struct ExplorerSettings {
   /// beyond the sensors' minimum range plus the sensor's offset behind the robot's centre.
   float view_min_range_m = 0.8f;
   int view_rays = 72;  ///< directions cast from each frontier cell (evenly over 360 deg), [4, 3600]
+  /// Looks at one place before it is given up for good, [1, 100]. After the first, a place is
+  /// looked at again only when nothing else is left (no frontier to go to, no place not yet
+  /// looked at) and view_relook_after_s [s], [0, 1e5] after the last look: a door closed then
+  /// may be open now (issue 23). 1 = each place once (the run ends sooner).
+  int view_looks = 2;
+  float view_relook_after_s = 30.0f;
+  /// After a look again the robot stays where it looked from while the map around what it looks
+  /// at keeps changing (more free cells within 2 m at a map update than at the one before; at
+  /// least 3 s), at most this long [s], [0, 600], unless a goal turns up: a door seen shut many
+  /// times needs about ten looks through it before the map holds it free (mapping.grid_update:
+  /// from max_logodds 3.5 to below the free threshold at -0.4 a miss). A place that does not
+  /// change costs 3 s.
+  float view_relook_dwell_s = 30.0f;
   /// Recent obstacles (a local costmap's obstacle layer): cells an obstacle point of the last
   /// recent_obstacles_s seconds fell in block the dynamic window's grid, whatever the map's
   /// log-odds say (where the pose moved since a place was mapped, the map needs several hits to

@@ -53,6 +53,10 @@ struct GoalQuery {
   ExplorerStats& stats;
   std::function<bool(int, int)> can_stand_on;  ///< the dynamic window fits on cell (x, y) of the planning grid
   bool retry = false;                ///< set by a strategy that changed what decisions depend on: decide again
+  /// Set by a strategy that has no goal now but will have one at a later decision (a place to
+  /// look at again once enough time has passed): the navigator waits for it instead of counting
+  /// the decision towards ExplorerSettings::final_retries.
+  bool later = false;
 };
 
 struct GoalProposal {
@@ -87,6 +91,9 @@ class GoalStrategy {
   virtual void goal_ended(const GoalEnd& end);
   /// The map frame moved by D (loop closure).
   virtual void shift(const Pose2& D) { (void)D; }
+  /// Frontier cells this strategy looked at and will not look for again (map frame), for the
+  /// report of what was left (unexplored.hpp).
+  [[nodiscard]] virtual std::vector<Eigen::Vector2f> looked_at() const { return {}; }
   /// While its goal is active: the grid to plan on instead of the navigator's (nullptr: that one).
   [[nodiscard]] virtual const InflatedGrid* planning_grid() const { return nullptr; }
   /// While its goal is active: the dynamic window's robot radius, if it differs [m].

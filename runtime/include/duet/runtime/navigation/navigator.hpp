@@ -44,6 +44,7 @@
 #include <duet/runtime/navigation/goal_strategy.hpp>
 #include <duet/runtime/navigation/recent_obstacle_layer.hpp>
 #include <duet/runtime/navigation/trail_layer.hpp>
+#include <duet/runtime/navigation/unexplored.hpp>
 #include <duet/runtime/robot/latency.hpp>
 
 #include <cstdint>
@@ -79,6 +80,7 @@ struct NavPlanView : NavPlanState {
 struct NavSnapshot : NavPlanState {
   ExplorationStatus stop_status = ExplorationStatus::kNoFrontier;
   std::string stop_detail;
+  std::vector<UnexploredRegion> left;  ///< Navigator::left_unexplored()
   std::optional<Pose2> goal;
   std::vector<Eigen::Vector2f> path;
   InflatedGrid local, planning;
@@ -140,6 +142,11 @@ class Navigator {
   /// cells left, all unreachable ...", "gave up: ..." - and, with OnDone::kReturnHome, whether
   /// the robot got home. Empty while exploring.
   [[nodiscard]] const std::string& stop_detail() const noexcept { return stop_detail_; }
+  /// What was left unexplored when exploration stopped, where and why (unexplored.hpp; largest
+  /// first; the stop detail lists the largest). Empty while exploring and when nothing was left.
+  [[nodiscard]] const std::vector<UnexploredRegion>& left_unexplored() const noexcept { return left_; }
+  /// Goals abandoned while exploring, counted per place (within the blacklist radius).
+  [[nodiscard]] const std::vector<GoalFailures>& goal_failures() const noexcept { return failures_; }
   [[nodiscard]] const ExplorerStats& stats() const noexcept { return stats_; }
   [[nodiscard]] const std::optional<Pose2>& goal() const noexcept { return goal_; }
   [[nodiscard]] const std::vector<Eigen::Vector2f>& path() const noexcept { return path_; }
@@ -224,6 +231,8 @@ class Navigator {
   std::size_t patrol_next_ = 0;  ///< the waypoint of the current / next patrol goal
   int patrol_misses_ = 0;        ///< waypoints skipped in a row (a whole lap: the patrol ends)
   std::string stop_detail_;
+  std::vector<GoalFailures> failures_;
+  std::vector<UnexploredRegion> left_;
 };
 
 }  // namespace duet

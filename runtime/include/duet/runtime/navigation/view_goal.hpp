@@ -3,8 +3,10 @@
 /// A view goal: when every frontier left is unreachable (or blacklisted), a cell the robot can
 /// stand on and reach from which a frontier cell it cannot reach is seen - along a line of
 /// sight through known-free cells, between view_min_range_m and view_range_m - the nearest by
-/// path. The goal faces the frontier cell. A frontier cell whose view goal was reached or
-/// abandoned is not looked for again.
+/// path. The goal faces the frontier cell. A place (a frontier cell and what lies within the
+/// blacklist radius of it) whose view goal was reached or abandoned is looked at again only when
+/// no place not yet looked at is left, at least view_relook_after_s after its last look, and at
+/// most view_looks times in all (a door shut at the first look may be open at the next).
 #include <duet/runtime/navigation/goal_strategy.hpp>
 
 namespace duet {
@@ -16,11 +18,24 @@ class ViewGoal final : public GoalStrategy {
   std::optional<GoalProposal> propose(GoalQuery& q) override;
   void goal_ended(const GoalEnd& end) override;
   void shift(const Pose2& D) override;
+  [[nodiscard]] std::vector<Eigen::Vector2f> looked_at() const override;
+  void map_updated(const GridView& latest, bool active) override;
 
  private:
   FrontierSettings frontier_;
   ExplorerSettings settings_;
-  GoalBlacklist viewed_;  ///< frontier cells whose view goal ended
+  struct Look {
+    Eigen::Vector2f xy;  ///< the frontier cell looked at (map frame)
+    int count = 0;       ///< view goals for it that ended
+    double last_s = 0.0; ///< when the last one ended
+  };
+  [[nodiscard]] const Look* look_near(const Eigen::Vector2f& p) const;
+  std::vector<Look> looks_;
+  CellThresholds cells_;
+  double dwell_until_s_ = -1.0;  ///< after a look again: no view goal before this (the robot looks on)
+  double dwell_max_s_ = -1.0;    ///< ... and never after this
+  std::size_t dwell_free_ = 0;   ///< free cells around the target at the last map update
+  bool dwell_changed_ = false;   ///< the last map update added free cells around the target
   Eigen::Vector2f target_{0.0f, 0.0f};
   FrontierWorkspace ws_;
 };

@@ -172,6 +172,9 @@ class SimChassis final : public ChassisInterface {
   [[nodiscard]] const ChassisSimSettings& settings() const noexcept { return settings_; }
   [[nodiscard]] const ChassisBody& body() const noexcept { return body_; }
   [[nodiscard]] const World& world() const noexcept { return *world_; }
+  /// The world changed (a door opened): collisions are checked against `world` from now on.
+  /// Throws duet::Error(kInvalidArgument) if it is null.
+  void set_world(std::shared_ptr<const World> world);
 
  private:
   void step();

@@ -115,6 +115,7 @@ struct ExploreSummary {
   StopReason stop_reason = StopReason::kRunning;
   std::string explorer_status;           ///< the explorer's last decision status (when done)
   std::string stop_detail;               ///< why the explorer stopped, in words (Navigator::stop_detail())
+  std::vector<UnexploredRegion> left;    ///< what the explorer left, where and why (Navigator::left_unexplored())
   std::string explorer_state;            ///< idle, exploring, returning_home or done
   double sim_time_s = 0.0;
   double wall_time_s = 0.0;
@@ -156,6 +157,7 @@ struct ExploreSummary {
   std::uint64_t blind_holds = 0;         ///< control periods held still with no frame mapped
   std::size_t relocalizations = 0;       ///< wide re-matches that moved the pose
   std::size_t relocalizations_held = 0;  ///< wide re-matches not tried: vision confirmed the odometry
+  std::size_t relocalizations_new_space = 0;  ///< wide re-matches not tried: the scan saw new space
   std::size_t relocalizations_asked = 0; ///< wide re-matches tried at once: vision gated out a jump
   double occupied_on_obstacles = -1.0;   ///< share of the grid's occupied cells within 0.1 m of a true obstacle (-1: none occupied)
 };
@@ -201,6 +203,9 @@ class SimExplore {
   void interrupt(const std::string& why);
 
   [[nodiscard]] double now_s() const noexcept { return t_; }
+  /// Opens the closed door (Solid::door) called `name` now (SimRobot::open_door); false if there
+  /// is none. Coverage already counts the area behind every door.
+  bool open_door(const std::string& name) { return robot_.open_door(name); }
   [[nodiscard]] bool running() const noexcept { return reason_ == StopReason::kRunning; }
   [[nodiscard]] ExploreSummary summary() const;
   [[nodiscard]] const std::vector<CurvePoint>& curve() const noexcept { return curve_; }
@@ -214,6 +219,7 @@ class SimExplore {
   [[nodiscard]] Mapper& mapper() noexcept { return runtime_->mapper(); }
   [[nodiscard]] const Explorer& explorer() const noexcept { return runtime_->explorer(); }
   [[nodiscard]] const ExplorationRuntime& runtime() const noexcept { return *runtime_; }
+  /// The world as loaded (doors closed); robot().world() is the world as it stands.
   [[nodiscard]] const World& world() const noexcept { return *world_; }
   [[nodiscard]] const SimChassis& chassis() const noexcept { return robot_.sim_chassis(); }
   /// Current explored area [m^2] and coverage (as in the curve).

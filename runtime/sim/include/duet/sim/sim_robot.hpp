@@ -79,8 +79,18 @@ class SimRobot final : public RobotSource {
   [[nodiscard]] SimRgbdSensor& sim_sensor(std::size_t i) { return *sensors_.at(i); }
   [[nodiscard]] std::size_t frames_rendered() const;
   [[nodiscard]] double now_s() const noexcept { return t_; }
+  /// Opens the closed door (Solid::door) called `name` now: it is gone from the frames and the
+  /// chassis' collisions (the renderer's scene is rebuilt). Doors with an opening time open by
+  /// themselves in advance(). Returns false if no closed door has that name.
+  bool open_door(const std::string& name);
+  /// The world as it stands now (doors opened so far removed).
+  [[nodiscard]] const World& world() const noexcept { return *world_; }
 
  private:
+  void rebuild(std::shared_ptr<const World> world);
+
+  std::shared_ptr<const World> world_;
+  RenderSettings render_;
   RgbdRenderer renderer_;
   SimChassis chassis_;
   std::vector<std::unique_ptr<SimRgbdSensor>> sensors_;

@@ -31,7 +31,9 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -62,6 +64,10 @@ struct Solid {
   float z_min_m = 0.0f;                   ///< bottom [m]
   float z_max_m = 2.5f;                   ///< top [m], > z_min_m
   Surface surface;
+  /// A door: it opens (the solid is gone) at opens_at_s of simulated time, or when the caller
+  /// opens it (SimRobot::open_door). Coverage counts the area behind a door as reachable.
+  bool door = false;
+  double opens_at_s = std::numeric_limits<double>::infinity();  ///< [s], >= 0; +inf: only when opened by the caller
 };
 
 /// An axis-aligned rectangle of the floor (start and target regions of the paper, Fig. 9).
@@ -89,6 +95,10 @@ struct World {
   /// The paper's end of task: the robot entering this region (Fig. 9, "target region").
   std::optional<Region> target_region;
 };
+
+/// The world with the named doors open (their solids removed); an empty `names` opens every door.
+/// Solids that are not doors are kept whatever their name.
+[[nodiscard]] World with_doors_open(const World& world, std::span<const std::string> names = {});
 
 /// Parses a YAML world; `source_name` stands for the file in messages.
 [[nodiscard]] World parse_world(std::string_view yaml_text, std::string_view source_name);
