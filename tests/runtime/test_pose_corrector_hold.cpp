@@ -27,6 +27,19 @@ struct Kidnap {
   int first_at = -1;     ///< the update after the carry that relocalised first (-1: none)
 };
 
+/// Every sensor's frame at the robot pose `truth` (frame noise seeded seed + sensor index), viewing
+/// `images` (one per sensor).
+std::vector<SensorFrame> render_frames(const sim::RgbdRenderer& renderer, const Profile& profile, const Pose2& truth, std::uint64_t seed,
+                                       std::vector<RgbdImage>& images) {
+  std::vector<SensorFrame> frames;
+  for (std::size_t i = 0; i < profile.sensors.size(); ++i) {
+    const SensorProfile& sp = profile.sensors[i];
+    renderer.render(sp, to_isometry(truth) * sp.T_robot_optical(), seed + i, images[i]);
+    frames.push_back(frame_view(images[i], sp, sp.T_robot_optical()));
+  }
+  return frames;
+}
+
 /// `confirmed`: confirm_odometry(true) from the carry on; `contradicted`: contradict_odometry()
 /// before the first update after it (vision gated out the jump).
 Kidnap kidnap(bool confirmed, bool contradicted = false) {
@@ -36,15 +49,7 @@ Kidnap kidnap(bool confirmed, bool contradicted = false) {
   Mapper mapper(profile.mapping);
   PoseCorrector corrector(profile, profile.runtime.pose_correction);
   std::vector<RgbdImage> images(profile.sensors.size());
-  auto frames_at = [&](const Pose2& truth, std::uint64_t seed) {
-    std::vector<SensorFrame> frames;
-    for (std::size_t i = 0; i < profile.sensors.size(); ++i) {
-      const SensorProfile& sp = profile.sensors[i];
-      renderer.render(sp, to_isometry(truth) * sp.T_robot_optical(), seed + i, images[i]);
-      frames.push_back(frame_view(images[i], sp, sp.T_robot_optical()));
-    }
-    return frames;
-  };
+  auto frames_at = [&](const Pose2& truth, std::uint64_t seed) { return render_frames(renderer, profile, truth, seed, images); };
   // A turn in place at the start maps the room around it (odometry = truth).
   Pose2 truth = world.start;
   double t = 0.0;
@@ -146,15 +151,7 @@ boxes:
                                             "square.yaml");
   const sim::RgbdRenderer renderer(world);
   std::vector<RgbdImage> images(profile.sensors.size());
-  auto frames_at = [&](const Pose2& truth, std::uint64_t seed) {
-    std::vector<SensorFrame> frames;
-    for (std::size_t i = 0; i < profile.sensors.size(); ++i) {
-      const SensorProfile& sp = profile.sensors[i];
-      renderer.render(sp, to_isometry(truth) * sp.T_robot_optical(), seed + i, images[i]);
-      frames.push_back(frame_view(images[i], sp, sp.T_robot_optical()));
-    }
-    return frames;
-  };
+  auto frames_at = [&](const Pose2& truth, std::uint64_t seed) { return render_frames(renderer, profile, truth, seed, images); };
   for (const float min_conflict : {0.05f, 0.0f}) {
     PoseCorrectionSettings pc = profile.runtime.pose_correction;
     pc.relocalize_min_conflict = min_conflict;
