@@ -42,29 +42,49 @@ export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1:allo
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 summary="$build/fuzz-summary.txt"
 printf '%-11s %12s %10s %8s %s\n' target executions "exec/s" corpus result > "$summary"
-status=0
-for t in "${targets[@]}"; do
-  corpus="$build/corpus/$t"
-  art="$build/artifacts/$t"
-  extra="$build/seeds/$t"
+# One target: fuzz it, write its summary line to <build>/fuzz-<target>.result, return its status.
+fuzz_one() {
+  local t="$1" corpus="$build/corpus/$1" art="$build/artifacts/$1" extra="$build/seeds/$1" log="$build/fuzz-$1.log"
   mkdir -p "$corpus" "$art" "$extra"
   while read -r f; do [ -n "$f" ] && cp -f "$f" "$extra/"; done < <(seeds_for "$t")
-  log="$build/fuzz-$t.log"
-  runs=()
+  local runs=()
   [ -n "${FUZZ_RUNS:-}" ] && runs=(-runs="$FUZZ_RUNS")
   [ -n "${FUZZ_SEED:-}" ] && runs+=(-seed="$FUZZ_SEED")
   echo "== fuzz $t: ${seconds} s${FUZZ_RUNS:+ or $FUZZ_RUNS runs}"
-  set +e
+  local rc=0
   "$build/fuzz/fuzz_$t" -max_total_time="$seconds" "${runs[@]}" -timeout=1 -rss_limit_mb=4096 -max_len=65536 \
-    -print_final_stats=1 -artifact_prefix="$art/" "$corpus" "$here/fuzz/corpus/$t" "$extra" > "$log" 2>&1
-  rc=$?
-  set -e
+    -print_final_stats=1 -artifact_prefix="$art/" "$corpus" "$here/fuzz/corpus/$t" "$extra" > "$log" 2>&1 || rc=$?
+  local execs speed units result
   execs="$(grep -m1 -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)"
   speed="$(grep -m1 -o 'stat::average_exec_per_sec: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)"
   units="$(find "$corpus" -type f | wc -l)"
-  if [ "$rc" = 0 ]; then result=ok; else result="FAILED (rc $rc, see $log and $art)"; status=1; fi
-  printf '%-11s %12s %10s %8s %s\n' "$t" "$execs" "$speed" "$units" "$result" | tee -a "$summary"
+  if [ "$rc" = 0 ]; then result=ok; else result="FAILED (rc $rc, see $log and $art)"; fi
+  printf '%-11s %12s %10s %8s %s\n' "$t" "$execs" "$speed" "$units" "$result" > "$build/fuzz-$t.result"
   if [ "$rc" != 0 ]; then grep -m 20 -E 'ERROR|SUMMARY|Test unit written|==[0-9]+==' "$log" || tail -30 "$log"; fi
+  return "$rc"
+}
+
+# The targets run FUZZ_JOBS at a time (default: one per core; each libFuzzer process is
+# single-threaded), each for the same time as alone.
+par="${FUZZ_JOBS:-$(nproc 2>/dev/null || echo 2)}"
+status=0
+running=0
+for t in "${targets[@]}"; do
+  rm -f "$build/fuzz-$t.result"
+  if ((running >= par)); then
+    wait -n || status=1
+    running=$((running - 1))
+  fi
+  fuzz_one "$t" &
+  running=$((running + 1))
+done
+while ((running > 0)); do
+  wait -n || status=1
+  running=$((running - 1))
+done
+for t in "${targets[@]}"; do
+  if [ -f "$build/fuzz-$t.result" ]; then cat "$build/fuzz-$t.result" >> "$summary"
+  else printf '%-11s %s\n' "$t" "FAILED (no result: see $build/fuzz-$t.log)" >> "$summary"; status=1; fi
 done
 echo "== fuzz summary ($summary)"
 cat "$summary"

@@ -8,7 +8,7 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${1:-$here/build}"
 shift || true
 
-pkgs=(build-essential cmake pkg-config
+pkgs=(build-essential cmake ninja-build pkg-config
       libeigen3-dev libembree-dev libtbb-dev libopencv-dev libpcl-dev
       libbenchmark-dev libgtest-dev libgmock-dev libyaml-cpp-dev libspdlog-dev libcli11-dev
       liblzf-dev nlohmann-json3-dev libpng-dev python3 python3-numpy python3-pytest
@@ -44,7 +44,11 @@ if ((${#missing[@]})); then
 fi
 
 jobs="$(nproc 2>/dev/null || echo 2)"
-cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE="${DUET_BUILD_TYPE:-Release}" "$@" >/dev/null
+# Ninja for a new build folder (one build graph over all targets: both cores stay busy across
+# target boundaries); a folder configured before keeps its generator (CMake cannot switch one).
+generator=()
+[ -f "$build/CMakeCache.txt" ] || generator=(-G Ninja)
+cmake -S "$here" -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE="${DUET_BUILD_TYPE:-Release}" "$@" >/dev/null
 # DUET_BUILD_TARGETS: build only these targets (space-separated; default: all).
 if [ -n "${DUET_BUILD_TARGETS:-}" ]; then
   for t in $DUET_BUILD_TARGETS; do cmake --build "$build" -j "$jobs" --target "$t"; done

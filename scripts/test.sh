@@ -9,7 +9,9 @@
 #      one-thread arenas: Debian's TBB is not instrumented, so TSan cannot see TBB's own
 #      synchronisation (its parallel loops would show as races).
 #   4. Fuzzing                  (build-fuzz/),  every libFuzzer target (clang, ASan + UBSan +
-#      LeakSanitizer) for DUET_FUZZ_SECONDS (default 20) seconds each: scripts/fuzz.sh.
+#      LeakSanitizer) for DUET_FUZZ_SECONDS (default 20) seconds each, one per core at a time:
+#      scripts/fuzz.sh.
+# New build folders use Ninja; test files compile in unity batches (tests/CMakeLists.txt).
 # Each test executable runs as DUET_TEST_SHARDS (default 4) ctest tests (gtest sharding): a test
 # executable's process start costs ~0.4 s of CPU in Release and ~0.9 s under ASan, which over
 # 600 tests was ~13 minutes of a 2-core run (tests/CMakeLists.txt). A failing shard prints its

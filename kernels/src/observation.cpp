@@ -13,6 +13,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -41,6 +42,26 @@ std::vector<SensorSector> paper_dual_sensors(int rays_per_sensor) {
   s2.yaw_rad = -std::numbers::pi_v<float> / 2.0f;
   validate(s1);
   return {s1, s2};
+}
+
+float heading_to_look(float look_rad, float from_rad, std::span<const SensorSector> sensors) {
+  const float pi = std::numbers::pi_v<float>;
+  auto wrap = [pi](float a) {
+    a = std::remainder(a, 2.0f * pi);  // [-pi, pi]
+    return a <= -pi ? a + 2.0f * pi : a;
+  };
+  if (!std::isfinite(look_rad) || !std::isfinite(from_rad) || sensors.empty()) return look_rad;
+  float best = wrap(look_rad), best_turn = std::numeric_limits<float>::infinity();
+  for (const SensorSector& s : sensors) {
+    if (!std::isfinite(s.yaw_rad)) continue;
+    const float h = wrap(look_rad - s.yaw_rad);
+    const float turn_rad = std::fabs(wrap(h - from_rad));
+    if (turn_rad < best_turn) {
+      best_turn = turn_rad;
+      best = h;
+    }
+  }
+  return best;
 }
 
 double fan_cells(std::span<const SensorSector> sensors, float resolution_m) {

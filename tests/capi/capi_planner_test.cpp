@@ -251,8 +251,6 @@ class PlannerTest : public DeviceTest {
   duet_planner planner_ = nullptr;
 };
 
-}  // namespace
-
 // ---- settings -------------------------------------------------------------------------------
 
 // The C defaults are the built-in dual profile's (the values duet explore and duet_runtime run with).
@@ -1689,3 +1687,5 @@ TEST(CapiPlannerMisuse, PaperDualSensorsErrorsGoToTheNoDeviceSlot) {
   EXPECT_EQ(duet_device_get_error(nullptr), DUET_ERROR_INVALID_ARGUMENT);
   EXPECT_NE(std::string(duet_device_get_error_message(nullptr)).find("out is NULL"), std::string::npos);
 }
+
+}  // namespace

@@ -14,7 +14,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_back_projection {
 
 using test::kInf;
 using test::kNaN;
@@ -488,5 +488,5 @@ TEST(BackProjection, BadInputThrowsInvalidArgumentWithUsefulMessage) {
 }
 
 
-}  // namespace
+}  // namespace test_back_projection
 }  // namespace duet

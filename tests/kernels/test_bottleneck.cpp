@@ -18,7 +18,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_bottleneck {
 
 using test::kNaN;
 constexpr float kFreeL = -2.0f, kOccL = 3.0f;
@@ -147,7 +147,7 @@ TEST(WidestPassage, EdgeCases) {
   std::vector<float> l(100, kFreeL);
   l[55] = kOccL;
   const InflatedGrid g = inflated(l, 10, 10);
-  for (const Eigen::Vector2f p : {Eigen::Vector2f(-1.0f, 0.1f), Eigen::Vector2f(kNaN, 0.1f), centre(g, 5, 5)}) {
+  for (const Eigen::Vector2f& p : {Eigen::Vector2f(-1.0f, 0.1f), Eigen::Vector2f(kNaN, 0.1f), centre(g, 5, 5)}) {
     widest_passage(g, p, out);  // outside, NaN, on the occupied cell
     ASSERT_EQ(out.size(), 100u);
     EXPECT_TRUE(std::all_of(out.begin(), out.end(), [](float v) { return v == 0.0f; }));
@@ -157,5 +157,5 @@ TEST(WidestPassage, EdgeCases) {
   test::expect_error([&] { widest_passage(bad, centre(g, 0, 0), out); }, "do not match");
 }
 
-}  // namespace
+}  // namespace test_bottleneck
 }  // namespace duet

@@ -12,7 +12,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_camera_points {
 
 using namespace test::back_projection;
 
@@ -81,5 +81,5 @@ TEST(BackProjection, CameraPointsTransformedAreBackProjectBitForBit) {
   EXPECT_TRUE(p[0].isApprox(test::paper_sensor1() * Eigen::Vector3f(1.0f, 2.0f, 3.0f)));
   transform_points(nullptr, 0, test::paper_sensor1(), nullptr);
 }
-}  // namespace
+}  // namespace test_camera_points
 }  // namespace duet

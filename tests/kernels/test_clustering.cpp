@@ -28,7 +28,7 @@
 #endif
 
 namespace duet {
-namespace {
+namespace test_clustering {
 
 using test::kInf;
 using test::kNaN;
@@ -400,5 +400,5 @@ TEST(ClusteringPcl, RawTableSceneMug) {
 }
 #endif
 
-}  // namespace
+}  // namespace test_clustering
 }  // namespace duet

@@ -11,7 +11,7 @@
 #include <random>
 
 namespace duet {
-namespace {
+namespace test_descriptor_match {
 
 std::vector<Descriptor256> random_descriptors(std::size_t n, std::uint32_t seed) {
   std::mt19937_64 rng(seed);
@@ -204,5 +204,5 @@ TEST(DescriptorMatch, BadArgumentsAreNamed) {
   expect([&] { match_descriptors_guided(d, px, d, px, test::kNaN, {}, out); }, "radius_px");
 }
 
-}  // namespace
+}  // namespace test_descriptor_match
 }  // namespace duet

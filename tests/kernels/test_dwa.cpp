@@ -21,7 +21,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_dwa {
 
 using test::kInf;
 using test::kNaN;
@@ -842,5 +842,5 @@ TEST(Dwa, WorkspaceIsReusedWithoutReallocation) {
                           dwa_step(view, Pose2{0.7f, 0.5f, 0.0f}, Twist{0.2f, 0.0f}, path, s, st3, fresh)));
 }
 
-}  // namespace
+}  // namespace test_dwa
 }  // namespace duet

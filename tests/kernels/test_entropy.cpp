@@ -12,7 +12,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_entropy {
 
 using test::kInf;
 using test::kNaN;
@@ -111,5 +111,5 @@ TEST(GridEntropy, EmptyTinyAndErrors) {
   EXPECT_NO_THROW(grid_entropy(GridView(lo, 4, 3, kMinGridResolutionM, Eigen::Vector2f(-1.5e4f, 1.5e4f)), out12));
 }
 
-}  // namespace
+}  // namespace test_entropy
 }  // namespace duet

@@ -18,7 +18,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_grid {
 
 using test::kInf;
 using test::kNaN;
@@ -564,11 +564,11 @@ TEST(Grid, IdenticalWithOneAndTwoThreads) {
   EXPECT_GT(a.known_cells(), 10000u);
 }
 
-}  // namespace
+}  // namespace test_grid
 }  // namespace duet
 
 namespace duet {
-namespace {
+namespace test_grid {
 
 // accumulate_grid: a reference by forward reasoning on a small grid - each observed src cell
 // moved by T lands in the dst cell its centre maps to (exact for multiples of 90 deg and whole-
@@ -645,5 +645,5 @@ TEST(AccumulateGrid, BadInputThrowsAndLeavesTheGrid) {
   EXPECT_EQ(dst.width(), 4);
 }
 
-}  // namespace
+}  // namespace test_grid
 }  // namespace duet

@@ -19,7 +19,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_inflation {
 
 using test::kInf;
 using test::kNaN;
@@ -332,5 +332,5 @@ TEST(Inflation, WillowMapSampledCellsMatchBruteForce) {
   }
 }
 
-}  // namespace
+}  // namespace test_inflation
 }  // namespace duet

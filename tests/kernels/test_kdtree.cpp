@@ -15,7 +15,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_kdtree {
 
 using test::kInf;
 using test::kNaN;
@@ -516,11 +516,11 @@ TEST(KdTree, LeafBatchKnnIdenticalWithOneAndTwoThreads) {
   }
 }
 
-}  // namespace
+}  // namespace test_kdtree
 }  // namespace duet
 
 namespace duet {
-namespace {
+namespace test_kdtree {
 
 // Degenerate inputs (issue 19): all points identical, most identical plus a few others, several
 // heavy clusters of duplicates, all in one millimetre voxel, collinear. Identical points end in
@@ -564,5 +564,5 @@ TEST(KdTree, DegenerateInputsStayExact) {
   }
 }
 
-}  // namespace
+}  // namespace test_kdtree
 }  // namespace duet

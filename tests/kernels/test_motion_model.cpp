@@ -9,7 +9,7 @@
 #include <random>
 
 namespace duet {
-namespace {
+namespace test_motion_model {
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -94,5 +94,5 @@ TEST(MotionModel, ChassisLimits) {
   bad([](ChassisLimits& b) { b.max_alpha_rps2 = INFINITY; });
 }
 
-}  // namespace
+}  // namespace test_motion_model
 }  // namespace duet

@@ -26,7 +26,7 @@
 #endif
 
 namespace duet {
-namespace {
+namespace test_normals {
 
 using test::kInf;
 using test::kNaN;
@@ -519,5 +519,5 @@ TEST(NormalsPcl, VoxelFilteredSlambookFrame) {
 }
 #endif
 
-}  // namespace
+}  // namespace test_normals
 }  // namespace duet

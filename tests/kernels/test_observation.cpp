@@ -26,7 +26,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_observation {
 
 using test::kNaN;
 constexpr double kDInf = std::numeric_limits<double>::infinity();
@@ -495,6 +495,46 @@ TEST(SensorSectors, InvalidFieldsThrow) {
   EXPECT_NO_THROW(validate(zero_len));
 }
 
+TEST(HeadingToLook, PaperRobotTurnsTheLeastToPointACone) {
+  const auto dual = paper_dual_sensors(30);
+  const std::vector<SensorSector> front(dual.begin(), dual.begin() + 1);
+  const float half = kPi / 2.0f;
+  // The place due east, the robot arriving heading north: the right sensor already faces it.
+  EXPECT_NEAR(heading_to_look(0.0f, half, dual), half, 1e-6f);
+  EXPECT_NEAR(heading_to_look(0.0f, half, front), 0.0f, 1e-6f);  // one sensor: face it
+  // Arriving heading east (towards it): the front sensor, no turn.
+  EXPECT_NEAR(heading_to_look(0.0f, 0.0f, dual), 0.0f, 1e-6f);
+  // Arriving heading south: a quarter turn either way; the front sensor (index 0) wins the tie.
+  EXPECT_NEAR(heading_to_look(0.0f, -half, dual), 0.0f, 1e-6f);
+  // The result is wrapped to (-pi, pi].
+  EXPECT_NEAR(heading_to_look(3.0f * kPi, 0.0f, front), kPi, 1e-5f);
+  // No sensors or non-finite angles: the look direction as given.
+  EXPECT_FLOAT_EQ(heading_to_look(0.7f, 0.0f, std::span<const SensorSector>()), 0.7f);
+  EXPECT_FLOAT_EQ(heading_to_look(0.7f, kNaN, dual), 0.7f);
+  EXPECT_TRUE(std::isnan(heading_to_look(kNaN, 0.0f, dual)));
+}
+
+TEST(HeadingToLook, MatchesABruteForceTurnOnRandomMounts) {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> ang(-4.0f * kPi, 4.0f * kPi);
+  for (int trial = 0; trial < 2000; ++trial) {
+    std::vector<SensorSector> sensors(1 + trial % 4);
+    for (auto& s : sensors) s.yaw_rad = std::remainder(ang(rng), 2.0f * kPi);
+    const float look = ang(rng), from = ang(rng);
+    const float h = heading_to_look(look, from, sensors);
+    ASSERT_GT(h, -kPi - 1e-6f);
+    ASSERT_LE(h, kPi + 1e-6f);
+    // Some sensor's axis points along `look` (to float precision)...
+    bool points = false;
+    for (const auto& s : sensors) points = points || std::fabs(std::remainder(h + s.yaw_rad - look, 2.0f * kPi)) < 1e-4f;
+    ASSERT_TRUE(points) << "trial " << trial;
+    // ...and pointing any other sensor's axis along `look` needs no smaller turn from `from`.
+    float best = test::kInf;
+    for (const auto& s : sensors) best = std::min(best, std::fabs(std::remainder(look - s.yaw_rad - from, 2.0f * kPi)));
+    ASSERT_NEAR(std::fabs(std::remainder(h - from, 2.0f * kPi)), best, 1e-4f) << "trial " << trial;
+  }
+}
+
 // ---- the model vs the reference ------------------------------------------------------------------
 
 TEST(ObservationModel, HandMadeGridsMatchReference) {
@@ -883,11 +923,11 @@ TEST(ObservationModel, InvalidSettingsAndSizesThrow) {
   }
 }
 
-}  // namespace
+}  // namespace test_observation
 }  // namespace duet
 
 namespace duet {
-namespace {
+namespace test_observation {
 // A wall nearer than the min range (0.3 m ahead, min range 0.5 m): the sensor sees nothing, with
 // both backends; the wall 0.55 m ahead is seen.
 TEST(ObservationModel, ObstacleNearerThanMinRangeBlocksTheRay) {
@@ -917,5 +957,5 @@ TEST(ObservationModel, ObstacleNearerThanMinRangeBlocksTheRay) {
     }
   }
 }
-}  // namespace
+}  // namespace test_observation
 }  // namespace duet

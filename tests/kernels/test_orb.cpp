@@ -12,7 +12,7 @@
 #include <set>
 
 namespace duet {
-namespace {
+namespace test_orb {
 
 ColorImageView view_of(const cv::Mat& bgr) {
   ColorImageView v;
@@ -195,5 +195,5 @@ TEST(Orb, BadViewsAndSettingsAreNamed) {
   expect(v, s, "grid_cols");
 }
 
-}  // namespace
+}  // namespace test_orb
 }  // namespace duet

@@ -14,7 +14,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_partial_sim {
 
 constexpr float kFreeL = -2.0f;  // clamped free (GridUpdateSettings.min_logodds)
 constexpr float kOccL = 3.5f;    // clamped occupied
@@ -496,5 +496,5 @@ TEST(PartialSim, InvalidInputsThrow) {
   EXPECT_THROW(validate(es), Error);
 }
 
-}  // namespace
+}  // namespace test_partial_sim
 }  // namespace duet

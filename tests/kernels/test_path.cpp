@@ -21,7 +21,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_path {
 
 using test::kNaN;
 
@@ -456,5 +456,5 @@ TEST(PathSearch, WorkspaceReuseAcrossGridsAndThreadCounts) {
   EXPECT_GT(found, 3);
 }
 
-}  // namespace
+}  // namespace test_path
 }  // namespace duet

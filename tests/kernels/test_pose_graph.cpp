@@ -14,7 +14,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_pose_graph {
 
 constexpr float kPi = std::numbers::pi_v<float>;
 
@@ -203,5 +203,5 @@ TEST(PoseGraph, BadInputIsNamedAndLeavesThePoses) {
   expect_error({e}, "pose 1");
 }
 
-}  // namespace
+}  // namespace test_pose_graph
 }  // namespace duet

@@ -16,7 +16,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_scan_match {
 
 constexpr float kRes = 0.05f;
 constexpr float kDeg = std::numbers::pi_v<float> / 180.0f;
@@ -328,5 +328,5 @@ TEST(ScanMatch, InvalidInputThrows) {
   expect_bad([](ScanMatchSettings& s) { s.linear_window_m = 5.0f; s.linear_step_m = 0.001f; }, "linear_window_m / linear_step_m");
 }
 
-}  // namespace
+}  // namespace test_scan_match
 }  // namespace duet

@@ -14,7 +14,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_segmentation {
 
 using test::kNaN;
 
@@ -302,5 +302,5 @@ TEST(Segmentation, IdenticalWithOneAndTwoThreads) {
   EXPECT_EQ(a, reference_segment(s.pts, s.normals, {}));
 }
 
-}  // namespace
+}  // namespace test_segmentation
 }  // namespace duet

@@ -10,7 +10,7 @@
 #include <random>
 
 namespace duet {
-namespace {
+namespace test_trajectory_eval {
 
 std::vector<StampedPose> helix(std::size_t n, double dt = 0.1) {
   std::vector<StampedPose> t(n);
@@ -154,5 +154,5 @@ TEST(TrajectoryEval, BadInputIsNamed) {
   EXPECT_EQ(empty.rmse, 0.0);
 }
 
-}  // namespace
+}  // namespace test_trajectory_eval
 }  // namespace duet

@@ -11,7 +11,7 @@
 #include <random>
 
 namespace duet {
-namespace {
+namespace test_visual_odometry {
 
 struct Scene {
   VisualFrame prev, curr;
@@ -288,5 +288,5 @@ TEST(VisualOdometry, FrameWithoutColourHasNoFeatures) {
   EXPECT_TRUE(out.cameras.empty());
 }
 
-}  // namespace
+}  // namespace test_visual_odometry
 }  // namespace duet

@@ -22,7 +22,7 @@
 #endif
 
 namespace duet {
-namespace {
+namespace test_voxel_filter {
 
 using test::kInf;
 using test::kNaN;
@@ -462,5 +462,5 @@ TEST(VoxelFilterPcl, BackProjectedSlambookFrame) {
 }
 #endif
 
-}  // namespace
+}  // namespace test_voxel_filter
 }  // namespace duet

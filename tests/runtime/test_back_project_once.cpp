@@ -16,7 +16,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_back_project_once {
 
 bool same_bits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
@@ -88,5 +88,5 @@ TEST(BackProjectOnce, PointsOfOtherFramesOrStepsAreRefused) {
   EXPECT_TRUE(same_bits(a.x, b.x) && same_bits(a.y, b.y) && same_bits(a.theta, b.theta));
 }
 
-}  // namespace
+}  // namespace test_back_project_once
 }  // namespace duet

@@ -18,7 +18,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_feature_seek {
 
 /// A 10 x 10 m free planning grid (0.05 m cells) with the robot at its centre, and an occupied
 /// wall cell run at (x, y0..y1) when asked.
@@ -181,5 +181,5 @@ TEST(FeatureSeek, ABlankCorridorSlowsAndTurnsTheRobotAndTheWheelsCarryThePose) {
   EXPECT_EQ(s.collisions, 0u);
 }
 
-}  // namespace
+}  // namespace test_feature_seek
 }  // namespace duet

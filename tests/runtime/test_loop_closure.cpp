@@ -20,7 +20,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_loop_closure {
 
 constexpr float kDeg = std::numbers::pi_v<float> / 180.0f;
 
@@ -299,5 +299,5 @@ TEST(LoopClosure, BadSettingsAreNamed) {
   EXPECT_THROW((void)lc.update(mapper, Pose2{std::nanf(""), 0.0f, 0.0f}, 0.0), Error);
 }
 
-}  // namespace
+}  // namespace test_loop_closure
 }  // namespace duet

@@ -19,7 +19,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_pose_corrector_hold {
 
 struct Kidnap {
   std::size_t relocalizations = 0, held = 0, asked = 0;
@@ -186,5 +186,5 @@ boxes:
   }
 }
 
-}  // namespace
+}  // namespace test_pose_corrector_hold
 }  // namespace duet

@@ -14,7 +14,7 @@
 #include <random>
 
 namespace duet {
-namespace {
+namespace test_pose_ekf {
 
 constexpr double kDt = 0.02;  // 50 Hz wheels
 
@@ -243,5 +243,5 @@ TEST(PoseEkf, BadSettingsAreNamed) {
   expect(s, "wheel_yaw_rate_sigma");
 }
 
-}  // namespace
+}  // namespace test_pose_ekf
 }  // namespace duet

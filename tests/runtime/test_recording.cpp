@@ -20,7 +20,7 @@
 #include <sstream>
 
 namespace duet {
-namespace {
+namespace test_recording {
 
 using duet_test::TempDir;
 
@@ -210,5 +210,5 @@ TEST_F(MalformedRecording, DepthOfTheWrongSize) {
   expect_error("000003.png");
 }
 
-}  // namespace
+}  // namespace test_recording
 }  // namespace duet

@@ -45,7 +45,7 @@ boxes:
   - {name: shelf, min: [4.0, 0.1], max: [4.4, 1.2], height_m: 1.5}
 )";
 
-duet::sim::ExploreSettings settings(std::uint64_t seed, double max_time) {
+duet::sim::ExploreSettings door_settings(std::uint64_t seed, double max_time) {
   duet::sim::ExploreSettings s;
   s.seed = seed;
   s.max_time_s = max_time;
@@ -126,7 +126,7 @@ TEST(SimDoors, AnOpenedDoorIsGoneFromTheFramesAndTheChassis) {
 }
 
 TEST(SimDoors, ARoomSeenOnlyThroughANarrowGapGetsAViewGoalAndTheStopNamesIt) {
-  auto es = settings(1, 400.0);
+  auto es = door_settings(1, 400.0);
   es.runtime.explorer.view_looks = 1;  // the stop's report is the subject here, not looking again (below)
   duet::sim::SimExplore run(duet::sim::parse_world(kGapRoom, "gap_room.yaml"), duet::builtin_profile("dual_kinect_kobuki"), es);
   run.run();
@@ -152,7 +152,7 @@ TEST(SimDoors, ADoorThatOpensAfterItsFrontierWasGivenUpIsGoneBackToAndExploredBe
   // The robot starts facing the door: it sees room B through the gap first, and room A is left
   // to explore once it gives B up.
   duet::sim::SimExplore run(duet::sim::parse_world(kDoorRooms, "door_rooms.yaml"), duet::builtin_profile("dual_kinect_kobuki"),
-                            settings(1, 600.0));
+                            door_settings(1, 600.0));
   const Eigen::Vector2f doorway(7.0f, 2.0f);
   double opened_at = -1.0;
   bool given_up = false;
@@ -191,7 +191,7 @@ TEST(SimDoors, APlaceLookedAtWhileItsDoorWasShutIsLookedAtAgainBeforeTheRobotSto
   w.start = duet::Pose2{1.0f, 2.0f, 0.0f};
   double t1 = -1.0;
   for (const int looks : {1, 2}) {
-    auto es = settings(1, 900.0);
+    auto es = door_settings(1, 900.0);
     es.runtime.explorer.view_looks = looks;
     duet::sim::SimExplore run(w, duet::builtin_profile("dual_kinect_kobuki"), es);
     double opened_at = -1.0, entered_b = -1.0;

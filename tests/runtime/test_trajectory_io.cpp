@@ -9,7 +9,7 @@
 #include <fstream>
 
 namespace duet {
-namespace {
+namespace test_trajectory_io {
 
 TEST(TrajectoryIo, ParsesCommentsBlankLinesAndCrlf) {
   const auto t = parse_tum_trajectory("# header\n\n1.5 1 2 3 0 0 0 1\r\n  2.5,4,5,6,0,0,0.7071068,0.7071068\n# end", "t.txt");
@@ -68,5 +68,5 @@ TEST(TrajectoryIo, MalformedLinesAreNamed) {
   }
 }
 
-}  // namespace
+}  // namespace test_trajectory_io
 }  // namespace duet

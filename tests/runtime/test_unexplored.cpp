@@ -14,7 +14,7 @@
 #include <vector>
 
 namespace duet {
-namespace {
+namespace test_unexplored {
 
 constexpr float kFreeL = -2.0f, kOccL = 3.0f, kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr int kW = 120, kH = 60;  // 6 m x 3 m at 5 cm
@@ -160,5 +160,5 @@ TEST(Unexplored, EmptyNaNAndOffGridInput) {
   }
 }
 
-}  // namespace
+}  // namespace test_unexplored
 }  // namespace duet

@@ -15,7 +15,7 @@
 #include <map>
 
 namespace duet {
-namespace {
+namespace test_visual_localization {
 
 sim::ExploreSettings vo_settings(std::uint64_t seed, double max_time, bool vision) {
   sim::ExploreSettings s;
@@ -125,5 +125,5 @@ TEST(VisualLocalization, BadSettingsAreNamed) {
   }
 }
 
-}  // namespace
+}  // namespace test_visual_localization
 }  // namespace duet

@@ -19,7 +19,7 @@
 #include <optional>
 
 namespace duet {
-namespace {
+namespace test_visual_odometry_real {
 
 std::filesystem::path data(const std::string& rel) { return std::filesystem::path(DUET_DATA_DIR) / rel; }
 
@@ -209,5 +209,5 @@ TEST(VisualOdometryReal, BlankImageFallsBackAndMalformedFramesAreNamed) {
   EXPECT_THROW((void)vo.track(two), Error);
 }
 
-}  // namespace
+}  // namespace test_visual_odometry_real
 }  // namespace duet

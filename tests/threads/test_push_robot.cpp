@@ -9,7 +9,7 @@
 #include <thread>
 
 namespace duet {
-namespace {
+namespace test_push_robot {
 
 RgbdImage image(int w, int h, std::uint16_t d) {
   RgbdImage im;
@@ -101,11 +101,11 @@ TEST(PushRobot, PushesFromSeveralThreadsAreAllCounted) {
   EXPECT_EQ(r.stats().frames_overflowed + r.stats().odometry_overflowed, 0u);
 }
 
-}  // namespace
+}  // namespace test_push_robot
 }  // namespace duet
 
 namespace duet {
-namespace {
+namespace test_push_robot {
 
 /// A robot turning on the spot at 0.5 rad/s then driving a quarter circle; its wheels slip so
 /// that they report 1.3x the heading change (and the true distance). Odometry at 50 Hz, gyro
@@ -188,5 +188,5 @@ TEST(PushRobotGyro, WithoutTheGyroTheWheelsAreKeptAndGapsAreCounted) {
   EXPECT_EQ(r2.stats().gyro_invalid, 2u);
 }
 
-}  // namespace
+}  // namespace test_push_robot
 }  // namespace duet

@@ -4,6 +4,8 @@
 #include <duet/runtime/robot/background_worker.hpp>
 #include <duet/runtime/robot/exploration_runtime.hpp>
 
+#include "exploration_runtime_tasks.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -26,8 +28,6 @@ ApproximateTimeSettings sync_settings(const Profile& profile, const RuntimeSetti
   a.inter_message_lower_bounds_s.push_back(0.9 / odom_rate);
   return a;
 }
-
-double wall_s() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 }  // namespace
 
@@ -52,99 +52,6 @@ void validate(const RuntimeSettings& s) {
   validate(s.loop_closure);
   validate(s.visual_odometry);
 }
-
-/// One controller -> navigator event (kBackground).
-struct ExplorationRuntime::Event {
-  enum class Kind { kTrail, kStall, kReached, kAbandon, kReturnHome, kStop } kind = Kind::kTrail;
-  Eigen::Vector2f xy{0.0f, 0.0f};
-  std::uint64_t goal_id = 0;
-  AbandonReason why = AbandonReason::kTimeout;
-  double t_s = 0.0;
-  Pose2 robot{};     ///< kReturnHome: the pose estimate when asked
-  std::string text;  ///< kStop: why
-};
-
-/// What a map update needs, taken on the control thread.
-struct ExplorationRuntime::MapInput {
-  std::vector<RgbdImage> images;  ///< one per sensor
-  double t_frames = 0.0;          ///< the frames' mean stamp [s]
-  Pose2 odom_at;                  ///< odometry interpolated to t_frames
-  Pose2 odom_latest;              ///< the latest odometry when the update was asked for
-  double now_s = 0.0;
-  std::optional<Pose2> override_pose;
-  bool odometry_confirmed = false;  ///< visual odometry's health was good (PoseCorrector::confirm_odometry)
-  bool odometry_contradicted = false;  ///< vision gated out a jump since the last update (PoseCorrector::contradict_odometry)
-};
-
-/// What a background task hands to the control thread.
-struct ExplorationRuntime::Result {
-  bool map = false;                       ///< a map update (else a decision)
-  std::shared_ptr<const NavSnapshot> nav;
-  ExplorerStats nav_stats;
-  std::shared_ptr<const OccupancyGrid> grid;
-  Pose2 correction;
-  float heading_rate = 0.0f;
-  std::optional<Pose2> shift;
-  std::vector<RgbdImage> images;          ///< to recycle on the control thread
-  std::size_t scan_matches = 0, scan_match_rejected = 0, loop_closures = 0;
-  std::size_t relocalizations = 0, relocalizations_held = 0, relocalizations_asked = 0, relocalizations_new_space = 0;
-  Pose2 relocalization;
-  std::pair<float, float> relocalization_scores{0.0f, 0.0f};
-  float relocalization_conflict = 0.0f;
-  double now_s = 0.0;
-  double scan_match_time_s = 0.0;
-  double frame_to_map_s = 0.0;
-  double done_wall_s = 0.0;
-};
-
-/// The controller's link to the navigator in the background (kBackground): events are queued,
-/// a decision is a task, and the plan is the latest published one with the goals the
-/// controller gave up (and, after a stall, the goal) taken out until the navigator has seen it.
-class ExplorationRuntime::Link final : public GoalLink {
- public:
-  explicit Link(ExplorationRuntime& rt) : rt_(rt) {}
-  NavPlanView plan() override {
-    NavPlanView v = rt_.plan_ ? rt_.plan_->view() : NavPlanView{};
-    if (v.goal && v.goal_id <= dropped_goal_id_) {
-      v.goal = nullptr;
-      v.path = {};
-    }
-    if (stall_pending_) v.wait_for_map = true;
-    return v;
-  }
-  void trail(const Eigen::Vector2f& p) override { post({Event::Kind::kTrail, p, 0, AbandonReason::kTimeout, 0.0}); }
-  void stall(const Eigen::Vector2f& contact, double now_s) override {
-    if (rt_.plan_ && rt_.plan_->goal) dropped_goal_id_ = std::max(dropped_goal_id_, rt_.plan_->goal_id);
-    stall_pending_ = true;
-    post({Event::Kind::kStall, contact, 0, AbandonReason::kStuck, now_s});
-  }
-  void decide(const Pose2& robot, double now_s) override { rt_.submit_decision(robot, now_s); }
-  void goal_reached(std::uint64_t id, double now_s) override {
-    dropped_goal_id_ = std::max(dropped_goal_id_, id);
-    post({Event::Kind::kReached, Eigen::Vector2f::Zero(), id, AbandonReason::kTimeout, now_s});
-  }
-  void abandon(std::uint64_t id, AbandonReason why, double now_s) override {
-    dropped_goal_id_ = std::max(dropped_goal_id_, id);
-    post({Event::Kind::kAbandon, Eigen::Vector2f::Zero(), id, why, now_s});
-  }
-  /// A map update that started after the stall was posted has been taken: the navigator knows.
-  void map_seen() { stall_pending_ = false; }
-  /// An operator's request: the current goal is no longer followed; the navigator hears of it
-  /// at the start of its next task.
-  void request(Event e) {
-    if (rt_.plan_ && rt_.plan_->goal) dropped_goal_id_ = std::max(dropped_goal_id_, rt_.plan_->goal_id);
-    post(std::move(e));
-  }
-
- private:
-  void post(const Event& e) {
-    std::lock_guard<std::mutex> lock(rt_.inbox_mutex_);
-    rt_.inbox_.push_back(e);
-  }
-  ExplorationRuntime& rt_;
-  std::uint64_t dropped_goal_id_ = 0;
-  bool stall_pending_ = false;
-};
 
 ExplorationRuntime::ExplorationRuntime(const Profile& profile, ChassisInterface& chassis,
                                        std::span<RgbdSensorInterface* const> sensors, const RuntimeSettings& settings)
@@ -276,7 +183,7 @@ Pose2 ExplorationRuntime::odometry_at(double t, const OdometryMsg& fallback) con
 }
 
 std::optional<Pose2> ExplorationRuntime::map_update(MapInput& in) {
-  const double w0 = wall_s();
+  const double w0 = runtime_wall_s();
   const std::size_t n = sensors_.size();
   std::vector<SensorFrame> frames;
   frames.reserve(n);
@@ -323,7 +230,7 @@ std::optional<Pose2> ExplorationRuntime::map_update(MapInput& in) {
   if (settings_.explorer.recent_obstacles_s > 0.0f)
     explorer_.set_recent_obstacles(memory_.add(mapper_.last_obstacles(), at, in.odom_at, in.t_frames, mapper_.grid().resolution()));
   explorer_.update_map(mapper_.grid(), pose, in.now_s);
-  if (!worker_) frame_to_map_.add((in.now_s - in.t_frames) + (wall_s() - w0));
+  if (!worker_) frame_to_map_.add((in.now_s - in.t_frames) + (runtime_wall_s() - w0));
   return shift;
 }
 
@@ -390,135 +297,8 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
   for (std::size_t i = 0; i < n; ++i) sensors_[i]->recycle(std::move(in.images[i]));
 }
 
-void ExplorationRuntime::submit_map_update(MapInput&& input) {
-  map_in_flight_ = true;
-  const double submitted = wall_s();
-  worker_->submit([this, in = std::make_shared<MapInput>(std::move(input)), submitted] {
-    apply_events();
-    Result r;
-    r.map = true;
-    r.shift = map_update(*in);
-    r.nav = std::make_shared<const NavSnapshot>(explorer_.navigator().snapshot());
-    r.nav_stats = explorer_.navigator().stats();
-    r.grid = std::make_shared<const OccupancyGrid>(mapper_.grid());
-    r.correction = corrector_.correction();
-    r.heading_rate = corrector_.heading_rate();
-    r.scan_matches = corrector_.matches();
-    r.scan_match_rejected = corrector_.rejected();
-    r.relocalizations_held = corrector_.relocalizations_held();
-    r.relocalizations_new_space = corrector_.relocalizations_new_space();
-    r.relocalizations_asked = corrector_.relocalizations_asked();
-    r.scan_match_time_s = corrector_.time_s();
-    r.relocalizations = corrector_.relocalizations();
-    r.relocalization = corrector_.last_relocalization();
-    r.relocalization_scores = corrector_.last_relocalization_scores();
-    r.relocalization_conflict = corrector_.last_conflict();
-    r.now_s = in->now_s;
-    r.images = std::move(in->images);
-    r.done_wall_s = wall_s();
-    r.frame_to_map_s = (in->now_s - in->t_frames) + (r.done_wall_s - submitted);
-    std::lock_guard<std::mutex> lock(results_mutex_);
-    results_.push_back(std::move(r));
-  });
-}
-
-void ExplorationRuntime::apply_events() {
-  std::vector<Event> events;
-  {
-    std::lock_guard<std::mutex> lock(inbox_mutex_);
-    events.swap(inbox_);
-  }
-  Navigator& nav = explorer_.navigator();
-  for (const Event& e : events) {
-    switch (e.kind) {
-      case Event::Kind::kTrail: nav.add_trail(e.xy); break;
-      case Event::Kind::kStall: nav.stall(e.xy, e.t_s); break;
-      case Event::Kind::kReached: nav.goal_reached(e.goal_id, e.t_s); break;
-      case Event::Kind::kAbandon: nav.abandon(e.goal_id, e.why, e.t_s); break;
-      case Event::Kind::kReturnHome: nav.return_home(e.robot, e.t_s); break;
-      case Event::Kind::kStop: nav.stop(e.text); break;
-    }
-  }
-}
-
-void ExplorationRuntime::submit_decision(const Pose2& robot, double now_s) {
-  if (decision_in_flight_) return;
-  decision_in_flight_ = true;
-  decision_asked_wall_ = wall_s();
-  ++stats_.decisions_requested;
-  worker_->submit([this, robot, now_s] {
-    apply_events();
-    const double w0 = wall_s();
-    explorer_.navigator().decide(robot, now_s);
-    if (settings_.decision_delay_s > 0.0) {
-      const double left = settings_.decision_delay_s - (wall_s() - w0);
-      if (left > 0.0) std::this_thread::sleep_for(std::chrono::duration<double>(left));
-    }
-    Result r;
-    r.nav = std::make_shared<const NavSnapshot>(explorer_.navigator().snapshot());
-    r.nav_stats = explorer_.navigator().stats();
-    r.done_wall_s = wall_s();
-    std::lock_guard<std::mutex> lock(results_mutex_);
-    results_.push_back(std::move(r));
-  });
-}
-
-void ExplorationRuntime::take_results() {
-  worker_->rethrow_if_failed();
-  std::vector<Result> results;
-  {
-    std::unique_lock<std::mutex> lock(results_mutex_, std::try_to_lock);
-    if (!lock.owns_lock()) return;  // the task is handing a result over: take it next period
-    results.swap(results_);
-  }
-  for (Result& r : results) {
-    if (r.map) {
-      map_in_flight_ = false;
-      ++stats_.sets_integrated;
-      correction_ = r.correction;
-      heading_rate_ = r.heading_rate;
-      if (!pose_override_) pose_ = compose(correction_, odom_pose_);
-      if (r.shift) {
-        explorer_.controller().shift(*r.shift);
-        ++stats_.loop_closures;
-      }
-      stats_.scan_matches = r.scan_matches;
-      stats_.scan_match_rejected = r.scan_match_rejected;
-      stats_.relocalizations_held = r.relocalizations_held;
-      stats_.relocalizations_new_space = r.relocalizations_new_space;
-      stats_.relocalizations_asked = r.relocalizations_asked;
-      stats_.scan_match_time_s = r.scan_match_time_s;
-      note_relocalization(r.relocalizations, r.relocalization, r.relocalization_scores, r.relocalization_conflict, r.now_s);
-      grid_copy_ = std::move(r.grid);
-      frame_to_map_.add(r.frame_to_map_s);
-      link_->map_seen();
-      for (std::size_t i = 0; i < r.images.size() && i < sensors_.size(); ++i) sensors_[i]->recycle(std::move(r.images[i]));
-    } else {
-      decision_in_flight_ = false;
-      if (r.nav && r.nav->goal) decision_latency_.add(r.done_wall_s - decision_asked_wall_);
-    }
-    plan_ = std::move(r.nav);
-    nav_stats_ = r.nav_stats;
-  }
-}
-
-void ExplorationRuntime::drain() {
-  if (!worker_) return;
-  worker_->wait_idle();
-  take_results();
-  if (visual_worker_) {
-    visual_worker_->wait_idle();
-    finish_visual(last_now_s_);
-  }
-}
-
-void ExplorationRuntime::wait_background_idle() const {
-  if (worker_) worker_->wait_idle();
-  if (visual_worker_) visual_worker_->wait_idle();
-}
-
 void ExplorationRuntime::tick(double now_s) {
-  const double w0 = wall_s();
+  const double w0 = runtime_wall_s();
   if (last_tick_wall_ >= 0.0) period_.add(w0 - last_tick_wall_);
   last_tick_wall_ = w0;
   last_now_s_ = now_s;
@@ -562,7 +342,7 @@ void ExplorationRuntime::tick(double now_s) {
     ++stats_.blind_holds;
   }
   chassis_.command(last_cmd_);
-  command_.add(wall_s() - w0);
+  command_.add(runtime_wall_s() - w0);
 }
 
 void ExplorationRuntime::note_relocalization(std::size_t count, const Pose2& offset, std::pair<float, float> scores, float conflict,

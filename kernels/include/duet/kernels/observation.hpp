@@ -73,6 +73,14 @@ struct SensorSector {
 /// (facing right); Kinect 57 deg, 0.5-5 m (DESIGN.md §7). Throws if rays_per_sensor < 1.
 std::vector<SensorSector> paper_dual_sensors(int rays_per_sensor = 30);
 
+/// The robot heading [rad, in (-pi, pi]] that points one of `sensors`' optical axes along
+/// `look_rad` (a frontier or a place to look at): of the headings look_rad - yaw_i, the one the
+/// robot reaches from `from_rad` with the least turn (ties: the lower sensor index). With one
+/// sensor facing forward this is look_rad; with the paper's two (front and right), a robot that
+/// arrives with the place on its right keeps its heading instead of turning 90 degrees to it.
+/// No sensors, or a non-finite angle: look_rad.
+[[nodiscard]] float heading_to_look(float look_rad, float from_rad, std::span<const SensorSector> sensors);
+
 /// The most cells one fan of every sensor walks on a grid of `resolution_m` cells [m] (clamped to
 /// kMinGridResolutionM): the sum of rays * (2 max_range / resolution + 2) - the unit of the
 /// observation and Procedure 1 work budgets.

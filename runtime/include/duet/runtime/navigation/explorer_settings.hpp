@@ -73,6 +73,11 @@ struct ExplorerSettings {
   /// from max_logodds 3.5 to below the free threshold at -0.4 a miss). A place that does not
   /// change costs 3 s.
   float view_relook_dwell_s = 30.0f;
+  /// A frontier goal's heading points whichever sensor needs the least turn from the heading
+  /// the robot arrives with (heading_to_look(), observation.hpp): with the paper's front and
+  /// right sensors, a frontier on the robot's right is looked at without turning to it.
+  /// false: the front sensor always faces it (as with one sensor).
+  bool look_with_any_sensor = true;
   /// Recent obstacles (a local costmap's obstacle layer): cells an obstacle point of the last
   /// recent_obstacles_s seconds fell in block the dynamic window's grid, whatever the map's
   /// log-odds say (where the pose moved since a place was mapped, the map needs several hits to
