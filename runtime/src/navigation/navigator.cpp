@@ -372,8 +372,7 @@ void Navigator::decide(const Pose2& robot, double now_s) {
       // least from the heading the path arrives with. Procedure 1's X_g keeps its simulated
       // heading (its reward was computed for it), and so does a view goal: its line of sight
       // through a gap runs from the goal cell, and a side sensor sits 0.12 m off that line
-      // (measured on the lab, seeds 1-5: view goals looked at with the side sensor made the
-      // runs end 0-150 s later).
+      // (lab, seeds 1-5: view goals looked at with the side sensor made runs end 0-150 s later).
       const Eigen::Vector2f in = path_.back() - path_[path_.size() - 2];
       const float from = in.squaredNorm() > 0.0f ? std::atan2(in.y(), in.x()) : robot.theta;
       goal_->theta = heading_to_look(goal_->theta, from, sectors_);
