@@ -13,6 +13,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -63,6 +64,55 @@ TEST(Explorer, FrontierGoalIsMovedOffTheUnknownCells) {
   ASSERT_FALSE(e.path().empty());
   EXPECT_NEAR(e.path().back().x(), goal.x, 1e-4f);
   EXPECT_NEAR(e.path().back().y(), goal.y, 1e-4f);
+}
+
+// A room 3 x 5.4 m, known free, walled, with unknown space behind a gap in its east wall (x >
+// 3.5 m, y in [4, 5]). The robot is below the gap, facing north, with paths not drawn to aisle
+// centres (clearance_weight 0), so it drives straight north to the frontier goal and arrives
+// with the frontier on its right: with look_with_any_sensor the paper's right sensor faces it
+// (no turn); without it the robot turns to face it with the front sensor.
+TEST(Explorer, AFrontierGoalIsLookedAtWithTheSensorThatTurnsTheLeast) {
+  auto room = [] {
+    duet::OccupancyGrid g(kRes, Eigen::Vector2f(0.0f, 0.0f), 80, 120);  // 4 x 6 m
+    for (int y = 0; y < g.height(); ++y)
+      for (int x = 0; x < g.width(); ++x) {
+        const float cx = (x + 0.5f) * kRes, cy = (y + 0.5f) * kRes;
+        const bool inside = cx > 0.5f && cx < 3.5f && cy > 0.1f && cy < 5.5f;
+        const bool east_gap = cx >= 3.5f && cy > 4.0f && cy < 5.0f;
+        g.logodds()[g.index(x, y)] = inside ? -2.0f : east_gap ? std::numeric_limits<float>::quiet_NaN() : 3.0f;
+      }
+    return g;
+  };
+  auto first_goal = [&](bool any_sensor, float start_x) {
+    duet::Profile p = frontier_only_profile();
+    p.exploration.path.clearance_weight = 0.0f;
+    duet::ExplorerSettings s;
+    s.look_with_any_sensor = any_sensor;
+    duet::Explorer e(p, s);
+    const duet::Pose2 robot{start_x, 0.6f, 1.5707964f};  // facing north
+    e.update_map(room(), robot, 0.0);
+    (void)e.control(robot, duet::Twist{}, 0.0);
+    EXPECT_TRUE(e.goal().has_value());
+    return std::make_pair(e.goal().value_or(duet::Pose2{}), std::vector<Eigen::Vector2f>(e.path().begin(), e.path().end()));
+  };
+  const float goal_x = first_goal(false, 2.0f).first.x;  // where the goal stands, off the unknown cells
+  const auto [front_goal, front_path] = first_goal(false, goal_x);
+  const auto [any_goal, any_path] = first_goal(true, goal_x);
+  ASSERT_GE(any_path.size(), 2u);
+  const Eigen::Vector2f in = any_path.back() - any_path[any_path.size() - 2];
+  const float from = std::atan2(in.y(), in.x());
+  // The same goal position either way, below the gap's far side.
+  EXPECT_NEAR(any_goal.x, front_goal.x, 1e-5f);
+  EXPECT_NEAR(any_goal.y, front_goal.y, 1e-5f);
+  // The path arrives northwards.
+  EXPECT_NEAR(from, 1.5707964f, 0.1f);
+  // Without the option the front sensor faces the gap: the heading points east of north by more
+  // than 45 deg. With it, the heading of heading_to_look() for that arrival: the right sensor's,
+  // within 45 deg of north - a smaller turn.
+  const float pi = 3.14159265f;
+  EXPECT_GT(std::fabs(std::remainder(front_goal.theta - from, 2.0f * pi)), 0.7854f);
+  EXPECT_NEAR(any_goal.theta, duet::heading_to_look(front_goal.theta, from, duet::paper_dual_sensors(30)), 1e-5f);
+  EXPECT_LE(std::fabs(std::remainder(any_goal.theta - from, 2.0f * pi)), 0.7854f);
 }
 
 TEST(Explorer, GoalIsMovedAgainWhenTheMapClosesAroundIt) {
