@@ -12,7 +12,7 @@
 #      LeakSanitizer) for DUET_FUZZ_SECONDS (default 20) seconds each, one per core at a time:
 #      scripts/fuzz.sh.
 # New build folders use Ninja; test files compile in unity batches (tests/CMakeLists.txt).
-# Each test executable runs as DUET_TEST_SHARDS (default 4) ctest tests (gtest sharding): a test
+# Each test executable runs as DUET_TEST_SHARDS (default 4; test_runtime 3x) ctest tests (gtest sharding): a test
 # executable's process start costs ~0.4 s of CPU in Release and ~0.9 s under ASan, which over
 # 600 tests was ~13 minutes of a 2-core run (tests/CMakeLists.txt). A failing shard prints its
 # whole output; rerun one test with e.g. build/tests/test_runtime --gtest_filter='SimExplore.*'.
