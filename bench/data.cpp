@@ -51,11 +51,11 @@ Eigen::Matrix3f R_body_optical() {
 /// returned as T_robot_optical.
 Eigen::Isometry3f sensor_extrinsics(float x, float y, float z, float yaw_deg, float pitch_deg,
                                     float roll_deg) {
-  constexpr float kDeg = 3.14159265358979f / 180.0f;
+  constexpr float rad_per_deg = 3.14159265358979f / 180.0f;
   Eigen::Isometry3f T = Eigen::Isometry3f::Identity();
-  T.linear() = (Eigen::AngleAxisf(yaw_deg * kDeg, Eigen::Vector3f::UnitZ()) *
-                Eigen::AngleAxisf(pitch_deg * kDeg, Eigen::Vector3f::UnitY()) *
-                Eigen::AngleAxisf(roll_deg * kDeg, Eigen::Vector3f::UnitX()))
+  T.linear() = (Eigen::AngleAxisf(yaw_deg * rad_per_deg, Eigen::Vector3f::UnitZ()) *
+                Eigen::AngleAxisf(pitch_deg * rad_per_deg, Eigen::Vector3f::UnitY()) *
+                Eigen::AngleAxisf(roll_deg * rad_per_deg, Eigen::Vector3f::UnitX()))
                    .toRotationMatrix() *
                R_body_optical();
   T.translation() = Eigen::Vector3f(x, y, z);

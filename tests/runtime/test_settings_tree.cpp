@@ -110,7 +110,9 @@ TEST(SettingsTree, EveryKeyCanBeSetAndABadValueIsNamed) {
   leaves(YAML::Load(y), "", keys);
   ASSERT_GT(keys.size(), 150u);
   std::size_t rejected = 0;
-  for (const auto& [key, value] : keys) {
+  for (const auto& entry : keys) {
+    const std::string& key = entry.first;  // named, not a structured binding: a lambda below captures it (clang 14)
+    const std::string& value = entry.second;
     if (key == "name" || key == "description") continue;
     const std::vector<duet::ProfileOverlay> same = {duet::set_overlay(key + "=" + value)};
     duet::Profile q;

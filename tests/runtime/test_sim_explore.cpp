@@ -86,7 +86,9 @@ TEST(SimExplore, SameSeedSameTrajectoryWithOneAndTwoThreads) {
     });
     return std::make_pair(out, sum);
   };
-  const auto [a, sa] = trajectory(1);
+  const auto one = trajectory(1);  // not a structured binding: a lambda below captures it (clang 14)
+  const auto& a = one.first;
+  const auto& sa = one.second;
   const auto [b, sb] = trajectory(2);
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t i = 0; i < a.size(); ++i) {
