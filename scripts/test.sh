@@ -2,7 +2,7 @@
 # Sets everything up (Debian packages, build) and runs the test suite three times:
 #   1. Release build            (build/),       ctest (with the ROS node end to end through roscore)
 #   2. AddressSanitizer + UBSan (build-asan/, clang),  ctest
-#   3. ThreadSanitizer          (build-tsan/, clang),  the tests of everything that runs threads of its
+#   3. ThreadSanitizer          (build-tsan/),  the tests of everything that runs threads of its
 #      own: the runtime's background mode and its worker, the clocks, the push queues, the C API's runtime with
 #      its own thread and pushes from three threads, the ROS node (its control and publishing threads,
 #      against the Release build's simulator bridge through roscore). They run their TBB work in
@@ -29,7 +29,7 @@ echo "== duet: Release build and tests"
 
 if [ "${DUET_SKIP_SANITIZERS:-0}" != 1 ]; then
   echo "== duet: AddressSanitizer + UndefinedBehaviorSanitizer build and tests"
-  # The sanitizer builds use clang (as the fuzz build does): it compiles them ~40 % faster than gcc.
+  # The ASan + UBSan build uses clang (as the fuzz build does): it compiles it ~40 % faster than gcc.
   clang_env=(DUET_EXTRA_PKGS="clang-14 libclang-rt-14-dev" CC=clang-14 CXX=clang++-14 DUET_BUILD_TYPE=RelWithDebInfo)
   env "${clang_env[@]}" "$here/scripts/setup.sh" "$here/build-asan" "$shards" -DDUET_SANITIZE=ON -DDUET_BUILD_BENCH=OFF
   export ASAN_OPTIONS="detect_leaks=0:abort_on_error=1:strict_string_checks=1"
@@ -42,7 +42,9 @@ if [ "${DUET_SKIP_SANITIZERS:-0}" != 1 ]; then
   if [ -x "$here/build/ros/duet_sim_ros" ]; then  # the ROS node's own threads, against the Release bridge
     tsan_targets+=" duet_ros" tsan_labels+='|ros_node_threads' tsan_args=(-DDUET_ROS_SIM_BRIDGE="$here/build/ros/duet_sim_ros")
   fi
-  env "${clang_env[@]}" DUET_BUILD_TARGETS="$tsan_targets" \
+  # gcc here: with clang's TSan, the ROS node's boost::shared_ptr messages, released inside
+  # Debian's uninstrumented libroscpp, show as a race (ros_node_threads; it passes with gcc's build).
+  DUET_BUILD_TYPE=RelWithDebInfo DUET_BUILD_TARGETS="$tsan_targets" \
     "$here/scripts/setup.sh" "$here/build-tsan" "$shards" -DDUET_SANITIZE_THREAD=ON -DDUET_BUILD_BENCH=OFF "${tsan_args[@]}"
   (cd "$here/build-tsan" && ctest --output-on-failure -j "$jobs" --timeout 1800 -L "^($tsan_labels)\$")
 

@@ -19,7 +19,7 @@ using duet_capi_test::DeviceTest;
 class Loop {
  public:
   Loop(duet_device d, const char* world, std::vector<const char*> sets, std::uint64_t seed = 1, bool gyro = false)
-      : device_(d), gyro_(gyro) {
+      : gyro_(gyro) {
     sets.insert(sets.begin(), "runtime.sensor_rate_hz=1");
     sim_ = duet_sim_new(d, world, DUET_PROFILE_NAME_OR_FILE, "dual", sets.data(), sets.size(), seed);
     rt_ = duet_runtime_new(d, DUET_PROFILE_NAME_OR_FILE, "dual", sets.data(), sets.size(), seed);
@@ -89,7 +89,6 @@ class Loop {
   double t() const { return t_; }
 
  private:
-  duet_device device_;
   duet_sim sim_ = nullptr;
   duet_runtime rt_ = nullptr;
   std::vector<duet_runtime_sensor_info> info_;

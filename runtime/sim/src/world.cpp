@@ -41,7 +41,6 @@ constexpr double kDegToRad = 0.017453292519943295;
 constexpr Range kCoord{-1e5, 1e5, false, false, "m"};
 constexpr Range kHeight{-100.0, 100.0, false, false, "m"};
 constexpr Range kThickness{0.0, 100.0, true, false, "m"};
-constexpr Range kSize{0.0, 1e5, true, false, "m"};
 constexpr Range kTextureScale{0.001, 10.0, true, false, "m"};
 constexpr Range kColour{0.0, 255.0, false, false, ""};
 constexpr Range kYaw{-360.0, 360.0, false, false, "deg"};
