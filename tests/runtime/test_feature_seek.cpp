@@ -142,16 +142,20 @@ TEST(FeatureSeek, ABlankCorridorSlowsAndTurnsTheRobotAndTheWheelsCarryThePose) {
   std::map<std::string, int> health_in_corridor;
   double max_speed_not_good = 0.0;
   bool reached_east_room = false;
+  double reached_at = 0.0;
   std::vector<bool> good_at;  // per estimated pose: vision was good when it was taken
   while (run.step()) {
     const auto h = run.runtime().localization_health();
     good_at.resize(run.estimated_trajectory().size(), h && *h == LocalizationHealth::kGood);
     const Pose2 truth = run.chassis().true_pose();
     if (h && truth.x > 5.0f && truth.x < 9.0f) ++health_in_corridor[to_string(*h)];
-    if (truth.x > 10.5f) reached_east_room = true;
+    if (!reached_east_room && truth.x > 10.5f) reached_east_room = true, reached_at = run.now_s();
     if (h && *h != LocalizationHealth::kGood) max_speed_not_good = std::max(max_speed_not_good, std::fabs(double(run.runtime().last_command().v)));
+    // Through the corridor and 10 s into the room beyond it: what this test is about is over.
+    if (reached_east_room && run.now_s() > reached_at + 10.0) run.interrupt("through the corridor");
   }
   const auto s = run.summary();
+  std::printf("corridor: the east room reached at %.1f s, the run stopped at %.1f s\n", reached_at, s.sim_time_s);
   std::printf("corridor: health in the corridor good %d degraded %d lost %d; seeks %d, capped periods %d; "
               "pose error max %.3f m; coverage %.1f %%\n",
               health_in_corridor["good"], health_in_corridor["degraded"], health_in_corridor["lost"], s.explorer.feature_seeks,

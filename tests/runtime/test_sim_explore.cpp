@@ -81,7 +81,7 @@ TEST(SimExplore, SameSeedSameTrajectoryWithOneAndTwoThreads) {
     arena.execute([&] {
       // 40 s; 20 s under the sanitizers (the same comparison over a shorter run).
       duet::sim::SimExplore run(two_rooms(), duet::builtin_profile("dual_kinect_kobuki"),
-                                settings(7, duet_test::kSanitized ? 20.0 : 40.0));
+                                settings(7, duet_test::short_runs() ? 20.0 : 40.0));
       run.run();
       out = run.true_trajectory();
       sum = run.summary();
@@ -102,7 +102,7 @@ TEST(SimExplore, SameSeedSameTrajectoryWithOneAndTwoThreads) {
   EXPECT_EQ(sa.explorer.decisions, sb.explorer.decisions);
   // And a different seed gives a different run (the noise and Procedure 1 are seeded; not
   // under the sanitizers: a third run of the same code).
-  if (duet_test::kSanitized) return;
+  if (duet_test::short_runs()) return;
   tbb::task_arena arena(2);
   arena.execute([&] {
     duet::sim::SimExplore other(two_rooms(), duet::builtin_profile("dual_kinect_kobuki"), settings(8, 40.0));
@@ -117,7 +117,7 @@ TEST(SimExplore, SameSeedSameTrajectoryWithOneAndTwoThreads) {
 TEST(SimExplore, NoCollisionOverFiveSeeds) {
   // Under the sanitizers one seed, of the single-sensor profile: the dual profile explores this
   // world under them in ExploresASmallWorldWithoutCollision (the same code, ~5x slower there).
-  const std::uint64_t first = duet_test::kSanitized ? 12 : 11, last = duet_test::kSanitized ? 12 : 15;
+  const std::uint64_t first = duet_test::short_runs() ? 12 : 11, last = duet_test::short_runs() ? 12 : 15;
   for (std::uint64_t seed = first; seed <= last; ++seed) {
     duet::sim::SimExplore run(two_rooms(), duet::builtin_profile(seed % 2 ? "dual_kinect_kobuki" : "single_kinect_kobuki"),
                               settings(seed, 90.0));
@@ -131,8 +131,10 @@ TEST(SimExplore, NoCollisionOverFiveSeeds) {
 // A gyro with a larger bias (std 0.034 deg/s, 7x the Kobuki's ~0.005 deg/s) on the lab: the raw
 // odometry's heading runs away; the scan-to-map correction holds the pose nearer the truth.
 TEST(SimExplore, ScanMatchingHoldsAGyroDriftThatTheOdometryDoesNot) {
-  auto run_with = [](bool correct, double reference_age_s = duet::PoseCorrectionSettings{}.reference_age_s) {
-    auto s = settings(5, 200.0);
+  // Short runs: 120 s each (the heading error grows with time: ~4 deg raw at 120 s).
+  const double seconds = duet_test::short_runs() ? 120.0 : 200.0;
+  auto run_with = [seconds](bool correct, double reference_age_s = duet::PoseCorrectionSettings{}.reference_age_s) {
+    auto s = settings(5, seconds);
     s.runtime.pose_correction.reference_age_s = reference_age_s;
     const duet::Profile p = duet::builtin_profile("dual_kinect_kobuki");
     duet::sim::ChassisSimSettings c = duet::sim::ChassisSimSettings::from_profile(p.chassis);
@@ -146,10 +148,12 @@ TEST(SimExplore, ScanMatchingHoldsAGyroDriftThatTheOdometryDoesNot) {
   };
   const auto raw = run_with(false);
   const auto fixed = run_with(true);
+  std::printf("gyro drift over %.0f s: heading error %.2f deg raw, %.2f deg corrected; pose error max %.3f m raw, %.3f m corrected\n",
+              seconds, raw.heading_error_deg, fixed.heading_error_deg, raw.pose_error_max_m, fixed.pose_error_max_m);
   EXPECT_EQ(raw.scan_matches + raw.scan_match_rejected, 0u);
   EXPECT_GT(fixed.scan_matches, fixed.sets_integrated / 2);
-  // The raw odometry's heading runs away (200 s at this seed's bias: ~6.7 deg).
-  EXPECT_GT(raw.heading_error_deg, 3.0);
+  // The raw odometry's heading runs away (this seed's bias: ~6.7 deg at 200 s, 3.1 deg at 120 s).
+  EXPECT_GT(raw.heading_error_deg, duet_test::short_runs() ? 1.5 : 3.0);
   EXPECT_NEAR(raw.pose_error_m, raw.odometry_error_m, 0.02);  // the pose is the odometry (a tick apart)
   // The correction holds the heading and the position (measured: 2.7 deg, 0.21 m max against
   // 6.7 deg, 0.57 m; matched against a 5-10 s old reference instead of the current grid:
@@ -160,7 +164,7 @@ TEST(SimExplore, ScanMatchingHoldsAGyroDriftThatTheOdometryDoesNot) {
   EXPECT_EQ(fixed.collisions, 0u);
   // Matched against the map as it was 5-10 s ago (reference_age_s) it holds the drift too
   // (not under the sanitizers: the same matcher on another grid, a third 200 s run).
-  if (duet_test::kSanitized) return;
+  if (duet_test::short_runs()) return;
   const auto aged = run_with(true, 5.0);
   EXPECT_GT(aged.scan_matches, aged.sets_integrated / 2);
   EXPECT_LT(aged.heading_error_deg, 0.5 * raw.heading_error_deg);
@@ -259,7 +263,7 @@ TEST(SimExplore, ReturnsHomeWhenDone) {
   EXPECT_LT(std::hypot(end.x - start.x, end.y - start.y), 0.35);  // the dynamic window's goal tolerance + odometry error
   // Staying (the default) stops where the exploration ended (not under the sanitizers: a
   // second run of the same exploration).
-  if (duet_test::kSanitized) return;
+  if (duet_test::short_runs()) return;
   duet::sim::SimExplore stay(two_rooms(), duet::builtin_profile("dual_kinect_kobuki"), settings(1, 300.0));
   stay.run();
   const auto st = stay.summary();
@@ -272,13 +276,17 @@ TEST(SimExplore, ReturnsHomeWhenDone) {
 // trail, lap after lap, until the time limit; the map is finished (the loop closer opens no
 // submap), and the health samples come every period.
 TEST(SimExplore, PatrolsAfterExploringWithAFinishedMap) {
-  duet::sim::ExploreSettings s = settings(1, 420.0);
+  // Measured: the map is finished at 72 s; 6 laps of 5 waypoints by 420 s (short runs: 180 s).
+  const double seconds = duet_test::short_runs() ? 180.0 : 420.0;
+  duet::sim::ExploreSettings s = settings(1, seconds);
   s.runtime.explorer.on_done = duet::OnDone::kPatrol;
   s.runtime.explorer.patrol_spacing_m = 1.5f;
   s.health_period_s = 30.0;
   duet::sim::SimExplore run(two_rooms(), duet::builtin_profile("dual_kinect_kobuki"), s);
   run.run();
   const auto sum = run.summary();
+  std::printf("patrol: map frozen at %.1f s; %d waypoints, %d reached, %d skipped, %d laps by %.0f s\n", sum.loops.frozen_at_s,
+              sum.explorer.patrol_waypoints, sum.explorer.patrol_reached, sum.explorer.patrol_skipped, sum.explorer.patrol_laps, sum.sim_time_s);
   ASSERT_EQ(sum.stop_reason, duet::sim::StopReason::kTimeLimit) << sum.stop_detail;
   EXPECT_EQ(sum.explorer_state, "patrolling");
   EXPECT_NE(sum.stop_detail.find("explored:"), std::string::npos) << sum.stop_detail;
@@ -294,7 +302,7 @@ TEST(SimExplore, PatrolsAfterExploringWithAFinishedMap) {
   ASSERT_TRUE(sum.loop_closure);
   ASSERT_GE(sum.loops.frozen_at_s, 0.0);
   const auto& h = run.health();
-  ASSERT_EQ(h.size(), 14u);  // every 30 s of 420 s
+  ASSERT_EQ(h.size(), static_cast<std::size_t>(seconds / 30.0));  // every 30 s
   long frozen_submaps = -1;
   for (std::size_t k = 0; k < h.size(); ++k) {
     EXPECT_NEAR(h[k].t_s, 30.0 * static_cast<double>(k + 1), 1e-6);
@@ -325,7 +333,7 @@ TEST(SimExplore, EachGoalStrategyAloneExploresTheRooms) {
                        Case{"paper", true, duet::FrontierSelection::kNearest}}) {
     // The paper's strategy is the built-in profile's, which the other runs of this world use
     // under the sanitizers too: there only the two frontier-only strategies run.
-    if (duet_test::kSanitized && c.simulation) continue;
+    if (duet_test::short_runs() && c.simulation) continue;
     duet::Profile p = duet::builtin_profile("dual_kinect_kobuki");
     p.exploration.strategy.use_simulation = c.simulation;
     p.exploration.strategy.frontier.selection = c.selection;
