@@ -14,6 +14,8 @@
 
 #include <gtest/gtest.h>
 
+#include "sanitized.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -108,8 +110,8 @@ TEST(PoseCorrectorHold, AKidnappedRobotWithVisionIsStillRelocalised) {
   sim::ExploreSettings s;
   s.runtime = p.runtime;
   s.seed = 1;
-  s.max_time_s = 40.0;
-  s.faults = {"kidnap@20"};
+  s.max_time_s = duet_test::short_runs() ? 28.0 : 40.0;
+  s.faults = {duet_test::short_runs() ? "kidnap@14" : "kidnap@20"};
   s.sensor_rate_hz = 5.0;  // as duet explore renders with vision on
   s.runtime.visual_odometry.enabled = true;
   sim::SimExplore run(sim::resolve_world("lab"), p, s);
