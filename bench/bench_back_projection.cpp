@@ -1,5 +1,7 @@
 // BackProjection/{duet,duet_1t,naive}/{dual,accum}: depth (+ colour) images -> coloured cloud.
 // Items = pixels read.
+// TransformPoints/{duet,duet_1t,eigen}/{dual,accum}: the frames' camera points (back_project_camera)
+// moved by a pose, as the mapper moves them into the map each cycle. Items = points.
 #include "bench_util.hpp"
 
 namespace duet::bench {
@@ -24,6 +26,30 @@ void register_back_projection() {
                                      report(state, pixels, double(out.size()));
                                    });
     }
+    auto cam = std::make_shared<CameraPoints>();
+    back_project_camera(in->frames, in->bp_settings, *cam);
+    const Eigen::Isometry3f T = in->frames.front().T_robot_camera;
+    for (const DuetImpl impl : kDuetImpls) {
+      benchmark::RegisterBenchmark(bench_name("TransformPoints", impl.name, in->name).c_str(), [cam, impl, T](benchmark::State& state) {
+        std::vector<Eigen::Vector3f> out(cam->cloud.size());
+        for (auto _ : state) {
+          arena(impl.threads).execute([&] { transform_points(cam->cloud.points.data(), cam->cloud.size(), T, out.data()); });
+          benchmark::DoNotOptimize(out.data());
+          benchmark::ClobberMemory();
+        }
+        report(state, cam->cloud.size(), double(out.size()));
+      });
+    }
+    // The plain Eigen expression, one thread: the reference.
+    benchmark::RegisterBenchmark(bench_name("TransformPoints", "eigen", in->name).c_str(), [cam, T](benchmark::State& state) {
+      std::vector<Eigen::Vector3f> out(cam->cloud.size());
+      for (auto _ : state) {
+        for (std::size_t i = 0; i < out.size(); ++i) out[i] = T * cam->cloud.points[i];
+        benchmark::DoNotOptimize(out.data());
+        benchmark::ClobberMemory();
+      }
+      report(state, cam->cloud.size(), double(out.size()));
+    });
     benchmark::RegisterBenchmark(bench_name("BackProjection", "naive", in->name).c_str(),
                                  [in, pixels](benchmark::State& state) {
                                    PointCloud out;

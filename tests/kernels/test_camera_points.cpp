@@ -6,8 +6,11 @@
 #include <duet/kernels/back_projection.hpp>
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <cstring>
+#include <limits>
+#include <random>
 #include <filesystem>
 #include <vector>
 
@@ -80,6 +83,35 @@ TEST(BackProjection, CameraPointsTransformedAreBackProjectBitForBit) {
   transform_points(p.data(), 1, test::paper_sensor1(), p.data());
   EXPECT_TRUE(p[0].isApprox(test::paper_sensor1() * Eigen::Vector3f(1.0f, 2.0f, 3.0f)));
   transform_points(nullptr, 0, test::paper_sensor1(), nullptr);
+}
+
+// transform_points() against Eigen's R * p + t, to the bit: random points over several blocks (a
+// partial last one), huge and tiny values, NaN and infinities; with one thread and with two; in place.
+TEST(TransformPoints, SameBitsAsEigenForAnyInputAndThreadCount) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-20.0f, 20.0f);
+  std::vector<Eigen::Vector3f> p(3 * 4096 + 17);
+  for (auto& q : p) q = {u(rng), u(rng), u(rng)};
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+  p[1] = {3e38f, -3e38f, 1e-38f};
+  p[2] = {nan, 1.0f, 2.0f};
+  p[3] = {inf, -inf, 0.0f};
+  p[4] = {-0.0f, 0.0f, 1e-45f};
+  Eigen::Isometry3f T = test::paper_sensor1();
+  T.translation() += Eigen::Vector3f(0.3f, -1.7f, 0.05f);
+  auto same_bits = [](const Eigen::Vector3f& a, const Eigen::Vector3f& b) { return std::memcmp(a.data(), b.data(), sizeof(a)) == 0; };
+  for (const int threads : {1, 2}) {
+    std::vector<Eigen::Vector3f> out(p.size(), Eigen::Vector3f::Constant(-1.0f));
+    tbb::task_arena(threads).execute([&] { transform_points(p.data(), p.size(), T, out.data()); });
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const Eigen::Vector3f want = T.linear() * p[i] + T.translation();
+      ASSERT_TRUE(same_bits(out[i], want)) << "point " << i << " with " << threads << " threads: " << out[i].transpose() << " vs "
+                                           << want.transpose();
+    }
+  }
+  std::vector<Eigen::Vector3f> q = p;
+  transform_points(q.data(), q.size(), T, q.data());
+  for (std::size_t i = 0; i < p.size(); ++i) ASSERT_TRUE(same_bits(q[i], T.linear() * p[i] + T.translation())) << i;
 }
 }  // namespace test_camera_points
 }  // namespace duet
