@@ -3,6 +3,7 @@
 # Usage: scripts/setup.sh [build-dir] [extra cmake args...]
 #   As root: installs what is missing (apt-get update once, then install).
 #   Not root: prints the apt-get command to run and stops if anything is missing.
+#   DUET_SETUP_PACKAGES_ONLY=1: the packages only (no configure, no build).
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${1:-$here/build}"
@@ -42,6 +43,8 @@ if ((${#missing[@]})); then
     exit 1
   fi
 fi
+
+[ "${DUET_SETUP_PACKAGES_ONLY:-0}" = 1 ] && exit 0
 
 jobs="$(nproc 2>/dev/null || echo 2)"
 # Ninja for a new build folder (one build graph over all targets: both cores stay busy across

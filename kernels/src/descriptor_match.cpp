@@ -24,10 +24,19 @@ struct AllCandidates {
   bool operator()(std::size_t, std::size_t) const noexcept { return true; }
 };
 struct WindowCandidates {
-  std::span<const Eigen::Vector2f> a, b;  // a[i] vs b[j]
+  WindowCandidates(std::span<const Eigen::Vector2f> pa, std::span<const Eigen::Vector2f> pb, float r2_)
+      : a(reinterpret_cast<const float*>(pa.data())), b(reinterpret_cast<const float*>(pb.data())), r2(r2_) {}
+  const float* a;  // a[i] vs b[j], as packed (x, y) floats
+  const float* b;
   float r2;
-  bool operator()(std::size_t i, std::size_t j) const noexcept { return (a[i] - b[j]).squaredNorm() <= r2; }
+  // (a[i] - b[j]).squaredNorm() <= r2 in plain floats (the same sum): called for every pair of
+  // the brute-force loop, where Eigen's small expressions were not inlined in sanitized builds.
+  bool operator()(std::size_t i, std::size_t j) const noexcept {
+    const float dx = a[2 * i] - b[2 * j], dy = a[2 * i + 1] - b[2 * j + 1];
+    return dx * dx + dy * dy <= r2;
+  }
 };
+static_assert(sizeof(Eigen::Vector2f) == 2 * sizeof(float), "a pixel is two packed floats");
 
 #define DUET_NEAREST_BODY                                                                 \
   Nearest n;                                                                              \
