@@ -10,6 +10,8 @@
 
 namespace duet {
 
+static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "a point is three packed floats");
+
 void validate(const BackProjectionSettings& s) {
   if (!(s.min_depth_m >= 0.0f) || !std::isfinite(s.min_depth_m))
     fail(ErrorCode::kInvalidArgument, "BackProjectionSettings.min_depth_m must be >= 0 m, got " + std::to_string(s.min_depth_m));
@@ -144,16 +146,31 @@ void back_project_impl(std::span<const SensorFrame> frames, const BackProjection
     const std::uint8_t* crow = g.color ? g.color + static_cast<std::size_t>(v) * g.color_stride : nullptr;
     const int ch = f.color.channels;
     const bool bgr = f.color.bgr;
+    // The pose as scalars, the points written as packed floats: R * pc + t summed in Eigen's
+    // order (transform_points()), without Eigen's small expressions per pixel (not inlined in
+    // the sanitized builds).
     const Eigen::Matrix3f R = f.T_robot_camera.linear();
     const Eigen::Vector3f t = f.T_robot_camera.translation();
+    const float r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), tx = t.x();
+    const float r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2), ty = t.y();
+    const float r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2), tz = t.z();
+    const float cx = f.intrinsics.cx;
     const float ifx = 1.0f / f.intrinsics.fx, ify = 1.0f / f.intrinsics.fy;
     const float yn = (static_cast<float>(v) - f.intrinsics.cy) * ify;
+    float* points = reinterpret_cast<float*>(out.points.data());
     std::size_t o = row_count[r];
     for (int u = 0; u < f.depth.width; u += g.step) {
       const float z = depth_at(f, row, u);
       if (std::isnan(z)) continue;
-      const Eigen::Vector3f pc(z * (static_cast<float>(u) - f.intrinsics.cx) * ifx, z * yn, z);
-      out.points[o] = camera_frame ? pc : Eigen::Vector3f(R * pc + t);
+      const float x = z * (static_cast<float>(u) - cx) * ifx, y = z * yn;
+      float* p = points + 3 * o;
+      if (camera_frame) {
+        p[0] = x, p[1] = y, p[2] = z;
+      } else {
+        p[0] = ((r00 * x + r01 * y) + r02 * z) + tx;
+        p[1] = ((r10 * x + r11 * y) + r12 * z) + ty;
+        p[2] = ((r20 * x + r21 * y) + r22 * z) + tz;
+      }
       if (pixels) (*pixels)[o] = static_cast<std::uint32_t>(v) * static_cast<std::uint32_t>(f.depth.width) + static_cast<std::uint32_t>(u);
       if (crow) {
         const std::uint8_t* px = crow + static_cast<std::size_t>(u) * ch;
@@ -179,7 +196,6 @@ void back_project_camera(std::span<const SensorFrame> frames, const BackProjecti
 }
 
 void transform_points(const Eigen::Vector3f* in, std::size_t n, const Eigen::Isometry3f& T, Eigen::Vector3f* out) {
-  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "a point is three packed floats");
   // p' = R p + t as scalar sums, in the order Eigen sums R * p + t ((r0 x + r1 y) + r2 z, then + t),
   // so the result is the same to the bit. The pose is copied into each block's locals: with
   // R and t behind a reference every store through `out` (a float, which may alias them) made the
