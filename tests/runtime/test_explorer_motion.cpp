@@ -1,0 +1,444 @@
+// Explorer (runtime/explorer.hpp) in motion on hand-made grids: recent obstacles stop the dynamic
+// window where the map sees free, the slow zone near obstacles, a cornered robot escapes, view
+// goals look at frontiers the robot cannot reach (and an abandoned one is not tried again), a
+// loop closure's frame shift moves the goal, path and recent obstacles, and the command never
+// exceeds the chassis. Goals and their standing room: test_explorer.cpp.
+#include <duet/kernels/error.hpp>
+#include <duet/runtime/navigation/explorer.hpp>
+#include <duet/runtime/config/profile.hpp>
+
+#include <gtest/gtest.h>
+
+#include "explorer_test_util.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace test_explorer_motion {
+
+constexpr float kRes = duet_test::kRoomRes;
+
+using duet_test::decide_in_half_known_room;
+using duet_test::fits;
+using duet_test::frontier_only_profile;
+using duet_test::half_known_room;
+using duet_test::needed_clearance;
+
+// One 20 Hz control period on a perfect chassis (the command becomes the twist), the map given
+// again once a second (period k % 20 == 0).
+void perfect_step(duet::Explorer& e, const duet::OccupancyGrid& g, duet::Pose2& robot, duet::Twist& current, int k, double t) {
+  if (k % 20 == 0) e.update_map(g, robot, t);
+  const duet::Twist cmd = e.control(robot, current, t);
+  robot.x += cmd.v * 0.05f * std::cos(robot.theta);
+  robot.y += cmd.v * 0.05f * std::sin(robot.theta);
+  robot.theta = std::remainder(robot.theta + cmd.omega * 0.05f, 2.0f * 3.14159265f);
+  current = cmd;
+}
+
+// Recent obstacles: the map has seen a corridor free many times (log-odds at the -2.0 clamp) but
+// the latest observations put a wall across it - as when the pose estimate has moved since the
+// corridor was mapped. The dynamic window's grid blocks the recent obstacle cells at once, except
+// cells within one cell of an obstacle of the map (the inflation's margin holds them); the
+// planning grid and the stored map are not changed; the counter counts the cells marked, bad
+// points are skipped. The robot (a perfect chassis) drives towards the frontier beyond and stops
+// short of the wall (the goal stays: its path is on the planning grid); with no recent obstacles
+// any more it goes on through.
+TEST(Explorer, RecentObstaclesStopTheDynamicWindowWhereTheMapSeesFree) {
+  const duet::Profile p = frontier_only_profile();
+  duet::Explorer e(p);
+  duet::OccupancyGrid g = half_known_room();
+  g.logodds()[g.index(40, 0)] = 3.5f;  // one cell the map already holds as an obstacle
+  duet::Pose2 robot{1.0f, 1.5f, 0.0f};
+  std::vector<Eigen::Vector2f> wall;
+  for (int y = 0; y < g.height(); ++y) wall.push_back(g.cell_center(40, y));  // x = 2.025 m, the whole width
+  wall.emplace_back(std::numeric_limits<float>::quiet_NaN(), 1.0f);  // skipped
+  wall.emplace_back(50.0f, 50.0f);                                   // outside the grid: ignored
+  e.set_recent_obstacles(wall);
+  EXPECT_EQ(e.recent_obstacles().size(), wall.size() - 1);
+  e.update_map(g, robot, 0.0);
+  for (int y = 0; y < g.height(); ++y) {
+    const std::size_t i = e.local_grid().index(40, y);
+    // (40, 0) is the map's own obstacle; (40, 1) is next to it: not marked, blocked by inflation.
+    const auto expected = y == 1 ? duet::CellState::kFree : duet::CellState::kOccupied;
+    EXPECT_EQ(e.local_grid().state[i], expected) << y;
+    EXPECT_EQ(e.local_grid().traversable[i], 0) << y;
+    EXPECT_EQ(e.local_grid().traversable[e.local_grid().index(38, y)], 0) << y;  // inflated
+    if (y > 0) {
+      EXPECT_EQ(e.inflated().state[i], duet::CellState::kFree) << y;  // planning: the map
+    }
+  }
+  EXPECT_EQ(e.stats().recent_obstacle_cells, static_cast<std::size_t>(g.height() - 2));  // per update
+  EXPECT_EQ(g.logodds()[g.index(40, 30)], -2.0f);  // the map itself is the caller's, unchanged
+  // Drive for 10 s (perfect chassis, map updates at 1 Hz with the same recent wall).
+  auto drive = [&](double t0, double seconds, bool wall_there) {
+    duet::Twist current{};
+    for (int k = 0; k < static_cast<int>(seconds * 20.0); ++k) {
+      const double t = t0 + 0.05 * k;
+      perfect_step(e, g, robot, current, k, t);
+      if (wall_there) {
+        EXPECT_LT(robot.x, 2.0f - p.chassis.radius_m) << t;  // never into the wall cells (x >= 2.0)
+      }
+    }
+  };
+  drive(0.0, 10.0, true);
+  EXPECT_GT(robot.x, 1.3f);  // it did drive towards the frontier
+  EXPECT_LE(robot.x, 2.0f - p.exploration.dwa.robot_radius_m + 0.05f);  // and stopped at the margin
+  // Nothing recent any more: the corridor is free again from the next map update on.
+  e.set_recent_obstacles({});
+  e.update_map(g, robot, 10.0);
+  EXPECT_EQ(e.local_grid().state[e.local_grid().index(40, 30)], duet::CellState::kFree);
+  EXPECT_EQ(e.stats().recent_obstacle_cells, 11u * static_cast<std::size_t>(g.height() - 2));  // 1 + 10 updates with the wall
+  drive(10.0, 20.0, false);
+  EXPECT_GT(robot.x, 2.5f);
+}
+
+// Slow zone (ExplorerSettings::slow_clearance_m): along a corridor 1.1 m wide (walls 0.5 m from
+// the robot's centre line) the dynamic window's top speed is the linear interpolation between
+// slow_speed_mps at its margin and the profile's max_v_mps at slow_clearance_m; in the open (the
+// half-known room, no obstacle seen) and with the slow zone off it drives at the profile's speed.
+duet::OccupancyGrid corridor() {
+  duet::OccupancyGrid g(kRes, Eigen::Vector2f(0.0f, 0.0f), 200, 22);
+  for (int y = 0; y < g.height(); ++y)
+    for (int x = 0; x < 160; ++x) g.logodds()[g.index(x, y)] = (y == 0 || y == 21) ? 3.5f : -2.0f;
+  return g;
+}
+
+float top_speed(const duet::ExplorerSettings& s, const duet::OccupancyGrid& g, float y0, float& x_end, int& slowed) {
+  duet::Explorer e(frontier_only_profile(), s);
+  duet::Pose2 robot{0.6f, y0, 0.0f};
+  duet::Twist current{};
+  float top = 0.0f;
+  for (int k = 0; k < 200; ++k) {  // 10 s
+    perfect_step(e, g, robot, current, k, 0.05 * k);
+    top = std::max(top, current.v);
+  }
+  x_end = robot.x;
+  slowed = e.stats().slowed;
+  return top;
+}
+
+TEST(Explorer, SlowZoneLimitsTheSpeedNearObstacles) {
+  const duet::Profile p = frontier_only_profile();
+  const float v_max = p.exploration.dwa.limits.max_v_mps;
+  const float margin = needed_clearance(p);
+  duet::ExplorerSettings slow;
+  slow.slow_clearance_m = 0.8f;
+  slow.slow_speed_mps = 0.25f;
+  ASSERT_LT(margin, 0.5f);
+  // The centre line's cells are 0.5 m from the nearer wall's cell centres.
+  const float limit = slow.slow_speed_mps + (v_max - slow.slow_speed_mps) * (0.5f - margin) / (slow.slow_clearance_m - margin);
+  const duet::OccupancyGrid g = corridor();
+  float x_slow = 0.0f, x_fast = 0.0f, x_open = 0.0f;
+  int n_slow = 0, n_fast = 0, n_open = 0;
+  const float v_slow = top_speed(slow, g, 0.55f, x_slow, n_slow);
+  EXPECT_LE(v_slow, limit + 1e-4f);
+  EXPECT_GT(v_slow, limit - 0.03f);  // it did speed up to the limit
+  EXPECT_GT(x_slow, 2.5f);           // and drove down the corridor
+  duet::ExplorerSettings off;
+  off.slow_clearance_m = 0.0f;
+  const float v_fast = top_speed(off, g, 0.55f, x_fast, n_fast);
+  EXPECT_GT(v_fast, v_max - 0.03f);
+  EXPECT_GT(x_fast, x_slow + 0.5f);
+  const float v_open = top_speed(slow, half_known_room(), 1.5f, x_open, n_open);
+  EXPECT_GT(v_open, v_max - 0.03f);
+  EXPECT_GT(n_slow, 100);  // of 200 periods: every period it drove down the corridor
+  EXPECT_EQ(n_fast, 0);
+  EXPECT_EQ(n_open, 0);
+  // The default is on, with these values.
+  EXPECT_EQ(duet::ExplorerSettings{}.slow_clearance_m, slow.slow_clearance_m);
+  EXPECT_EQ(duet::ExplorerSettings{}.slow_speed_mps, slow.slow_speed_mps);
+  // Bad settings name the field.
+  for (const float bad : {-0.1f, 10.5f, std::numeric_limits<float>::quiet_NaN()}) {
+    duet::ExplorerSettings s;
+    s.slow_clearance_m = bad;
+    EXPECT_THROW(duet::Explorer(p, s), duet::Error) << bad;
+  }
+  for (const float bad : {0.0f, -0.2f, std::numeric_limits<float>::infinity()}) {
+    duet::ExplorerSettings s;
+    s.slow_speed_mps = bad;
+    try {
+      duet::Explorer e(p, s);
+      ADD_FAILURE() << bad;
+    } catch (const duet::Error& err) {
+      EXPECT_NE(std::string(err.what()).find("slow_speed_mps"), std::string::npos) << err.what();
+    }
+  }
+}
+
+// Cornered (ExplorerSettings::cornered_after_s). The map around the robot on Willow seed 4 at
+// 400 s, where it spun for 3300 s (from a debugging dump of the run, 2 m x 2 m, north up,
+// 'M' occupied, 'U' not seen (here: occupied), 'u' uncertain, else free; '@' the robot, '*' its
+// path, ',' free cells the dynamic window's radius does not fit on). The robot stands on a bump
+// of the band it fits in (0.292 m of clearance for 0.29 m needed) with its path going south from
+// the cell west of it; spinning, every forward motion the window can reach leaves the band, so it
+// turns on (creeping at 3 mm/s) for ever. Below the map a strip never seen: the frontier.
+duet::OccupancyGrid willow_corner() {
+  static const char* const kRows[41] = {
+      "UUUUUUUUUUUUUU,,,,,,..............,,,,,,,",
+      "UUUUUUUUUUUUUUU,,,,,,,...........,,,,,,,,",
+      "UUUUUUUUUUUUUUU,,,,,,,.........,,,,,,,,,U",
+      "UUUUUUUUUUUUUUU,,,,,,,,.......,,,,,,,,,UU",
+      "UUUUUUUUUUUUUUUU,M,,,,,......,,,,,,,,,UUU",
+      "UUUUUUUUUUUUUUUU,M,,,,,....,,,,,,,,,,UUUU",
+      "UUUUUUUUUUUUUUUU,M,,,,,..,,,,,,,,,,UUUUUU",
+      "UUUUUUUUUUUUMMMMMM,,,,,,,,,,,,,,,,UUUUUUU",
+      "UUUUUUUUUUUUMMMMMM,,,,,,,,,,,,,,,UUUUUUUU",
+      "UUUUUUUUUUUUMMMMMM,,,,,,,,,,,,,UUUUUUUUUU",
+      "UUUUUUUUUUUUMM,,,,,,,,,,,,,,,,UUUUUUUUUUU",
+      "UUUUUUUUUUUMMM,,,,,,,,,,,,,M,UUUUUUUUUUUU",
+      "UUUUUUUUUUMMMM,,,,,,,,,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUUUUUMMMM,,,,,,,,,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUUUUUMM,,,,,,,,..,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUUUUUMM,,,,,,,...,,,,,MMMUUUUUUUUUUU",
+      "UUUUUUUUMMMM,,,,,,....,,,,,,,MUUUUUUUUUUU",
+      "UUUUUUUUMMMM,,,,,,....,,,,,,,MUUUUUUUUUUU",
+      "UUUUUUUUMM,,,,,,,.....,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUUUMM,,,,,,,....,,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUUUMM,,,,,,...*@,,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUUUMM,,,,,,...*,,,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUUMMM,,,,,....*,,,,,,,MUUUUUUUUUUUUU",
+      "UUUUUUMM,M,,,,,....*,,,,,MuMMUMMUUUUMMMMU",
+      "UUUUUUMM,,,,,,,....*,,,,,uMMMMMMMMMMMMMMM",
+      "UUUUUUMM,,,,,,,....*,,,,,,MMMMMMMMMMMMMMM",
+      "UUUUUM,M,,,,,,.....*,,,,,,MMMMMMMMMMMMMMM",
+      "UUUUMM,M,,,,,,.....*.,,,,M,MMMMMMMMMMMMMM",
+      "UUUUMM,,,,,,,......*.,,,,,,,,,,,,,,,,,,,,",
+      "UUUUMM,,,,,,,......*..,,,,,,,,,,,,,,,,,,,",
+      "UUUUMM,,,,,,........*.,,,,,,,,,,,,,,,,,,,",
+      "UUMM,M,,,,,,,,.......*.,,,,,,,,,,,,,,,,,,",
+      "UUMM,,,,,,,,,,,,......*..,,,,,,,,,,,,,,,,",
+      "UUMM,,,,,,,,,,,,,,.....*.................",
+      "UUUM,,,,,,,,,,,,,,,,....*................",
+      "UUUM,MMMMM,,,,,,,,,,,,...*...............",
+      "UU,MM,UUUM,,,,,,,,,,,,....**.............",
+      "U,MM,UUUUMMMMM,,,,,,,,,,....**...........",
+      "UuMM,UUUUUUUUM,,,M,,,,,,......**.........",
+      "UMM,UUUUUUUUUMMMMM,,,,,,,,......*********",
+      "UMMUUUUUUUUUUUUUU,,,,,,,,,...............",
+  };
+  constexpr int kExtra = 4;  // unknown rows below
+  duet::OccupancyGrid g(kRes, Eigen::Vector2f(0.0f, 0.0f), 41, 41 + kExtra);
+  for (int r = 0; r < 41; ++r)
+    for (int c = 0; c < 41; ++c) {
+      const char ch = kRows[r][c];
+      g.logodds()[g.index(c, 40 - r + kExtra)] = ch == 'M' || ch == 'U' ? 3.5f : ch == 'u' ? 0.0f : -2.0f;
+    }
+  for (int y = 0; y < kExtra; ++y)
+    for (int x = 0; x < 41; ++x) g.logodds()[g.index(x, y)] = std::numeric_limits<float>::quiet_NaN();
+  return g;
+}
+
+// Drives the explorer on the map for `seconds` with a perfect chassis (the command is the next
+// twist), from the spot and the spin of the Willow run; returns the final pose.
+duet::Pose2 drive_from_the_corner(duet::Explorer& e, const duet::OccupancyGrid& g, double seconds, float* min_clearance) {
+  duet::Pose2 robot{g.cell_center(20, 24).x(), g.cell_center(20, 24).y(), -0.16f};
+  duet::Twist current{0.0f, -0.8f};
+  *min_clearance = std::numeric_limits<float>::infinity();
+  double t = 0.0;
+  for (int k = 0; t < seconds; ++k) {
+    perfect_step(e, g, robot, current, k, t);
+    t += 0.05;
+    const Eigen::Vector2i c = e.inflated().cell_of(Eigen::Vector2f(robot.x, robot.y));
+    *min_clearance = std::min(*min_clearance, e.inflated().clearance_m[e.inflated().index(c.x(), c.y())]);
+  }
+  return robot;
+}
+
+TEST(Explorer, CorneredRobotEscapesTowardsMoreClearance) {
+  const duet::Profile p = frontier_only_profile();
+  const duet::OccupancyGrid g = willow_corner();
+  const Eigen::Vector2f start = g.cell_center(20, 24);
+  float min_clearance = 0.0f;
+  {  // Without the escape (the default, 0 = off): 60 s on the spot.
+    duet::Explorer e(p);
+    const duet::Pose2 end = drive_from_the_corner(e, g, 60.0, &min_clearance);
+    EXPECT_LT((Eigen::Vector2f(end.x, end.y) - start).norm(), 0.1f);
+    EXPECT_EQ(e.stats().goals_reached, 0);
+    EXPECT_EQ(e.stats().cornered_escapes, 0);
+  }
+  // With it (8 s): out after the first 8 s, then on to the frontier.
+  duet::ExplorerSettings s;
+  s.cornered_after_s = 8.0f;
+  duet::Explorer e(p, s);
+  const duet::Pose2 end = drive_from_the_corner(e, g, 60.0, &min_clearance);
+  EXPECT_GT(e.stats().cornered_escapes, 0);
+  EXPECT_GE(e.stats().goals_reached, 1);
+  EXPECT_GT((Eigen::Vector2f(end.x, end.y) - start).norm(), 0.3f);
+  EXPECT_GT(min_clearance, p.chassis.radius_m);  // never touched anything on the way
+}
+
+// A room whose east wall (x = 2 m) has a one-cell gap; through it the sensors saw a one-cell-wide
+// line of free cells 1.2 m long (a room beyond, seen through a crack), unknown all around it: a
+// frontier the robot can never stand on. View goals: the robot goes to a cell of the room with a
+// straight line of free cells to a frontier cell and faces it; each frontier cell looked at is
+// not looked at again (nor any within the frontier blacklist radius), so it takes at most one view
+// per 0.5 m of the line and then stops. With view_range_m = 0 it stops at once.
+duet::OccupancyGrid room_with_a_crack() {
+  duet::OccupancyGrid g(kRes, Eigen::Vector2f(0.0f, 0.0f), 100, 60);
+  for (int y = 0; y < g.height(); ++y)
+    for (int x = 0; x < 40; ++x) g.logodds()[g.index(x, y)] = -2.0f;
+  for (int y = 0; y < g.height(); ++y) g.logodds()[g.index(40, y)] = 3.5f;  // the wall
+  for (int x = 40; x < 64; ++x) g.logodds()[g.index(x, 30)] = -2.0f;        // the gap and the line beyond
+  return g;
+}
+
+TEST(Explorer, ViewGoalsLookAtFrontiersTheRobotCannotReach) {
+  const duet::Profile p = frontier_only_profile();
+  const duet::OccupancyGrid g = room_with_a_crack();
+  const float line_y = 30.5f * kRes;
+  const duet::Pose2 start{0.6f, 0.6f, 1.0f};
+  duet::ExplorerSettings off;
+  off.view_range_m = 0.0f;
+  off.final_retries = 0;
+  duet::Explorer stops(p, off);
+  stops.update_map(g, start, 0.0);
+  (void)stops.control(start, duet::Twist{}, 0.0);
+  EXPECT_FALSE(stops.goal().has_value());
+  EXPECT_EQ(stops.state(), duet::ExplorerState::kDone);
+  EXPECT_EQ(stops.stop_status(), duet::ExplorationStatus::kAllUnreachable);
+  EXPECT_EQ(stops.stats().view_goals, 0);
+
+  duet::ExplorerSettings on;
+  on.final_retries = 0;
+  on.view_looks = 1;  // each place once (looks again: SimDoors.APlaceLookedAtWhileItsDoorWasShut...)
+  duet::Explorer e(p, on);
+  e.update_map(g, start, 0.0);
+  const duet::InflatedGrid& ig = e.inflated();
+  double t = 0.0;
+  int views = 0;
+  float far_target = 0.0f;
+  std::vector<Eigen::Vector2f> targets;
+  for (; views < 10; ++views) {
+    (void)e.control(start, duet::Twist{}, t);
+    if (!e.goal().has_value()) break;
+    const duet::Pose2 goal = *e.goal();
+    ASSERT_FALSE(e.decisions().empty());
+    const duet::DecisionRecord& d = e.decisions().back();
+    EXPECT_TRUE(d.view);
+    EXPECT_EQ(d.status, duet::ExplorationStatus::kAllUnreachable);
+    // The target is a frontier cell of the gap or the line beyond it, at least a blacklist
+    // radius from every target before it.
+    EXPECT_NEAR(d.view_target.y(), line_y, 1e-4f);
+    EXPECT_GT(d.view_target.x(), 2.0f);
+    for (const auto& prev : targets) EXPECT_GT((d.view_target - prev).norm(), p.exploration.strategy.frontier.blacklist_radius_m);
+    targets.push_back(d.view_target);
+    // The goal: in the room, where the robot fits, 0.8-4 m from the target, facing it, and the
+    // straight line between them crosses known-free cells only.
+    const Eigen::Vector2f at(goal.x, goal.y);
+    EXPECT_LT(goal.x, 2.0f - needed_clearance(p));
+    EXPECT_TRUE(fits(e, goal, needed_clearance(p)));
+    EXPECT_GE((d.view_target - at).norm(), on.view_min_range_m - kRes);
+    EXPECT_LE((d.view_target - at).norm(), on.view_range_m);
+    EXPECT_NEAR(goal.theta, std::atan2(d.view_target.y() - goal.y, d.view_target.x() - goal.x), 1e-5f);
+    for (float u = 0.0f; u <= 1.0f; u += 0.01f) {
+      const Eigen::Vector2i c = ig.cell_of(at + u * (d.view_target - at));
+      EXPECT_EQ(ig.state[ig.index(c.x(), c.y())], duet::CellState::kFree) << u;
+    }
+    far_target = std::max(far_target, d.view_target.x());
+    ASSERT_FALSE(e.path().empty());
+    EXPECT_NEAR(e.path().back().x(), goal.x, 1e-4f);
+    EXPECT_NEAR(e.path().back().y(), goal.y, 1e-4f);
+    // The robot stands at the goal, facing its target: reached.
+    t += 1.0;
+    (void)e.control(goal, duet::Twist{}, t);
+    EXPECT_FALSE(e.goal().has_value());
+    EXPECT_EQ(e.stats().view_goals_reached, views + 1);
+    t += 1.0;
+  }
+  // The gap and the 1.2 m line (to x = 3.2 m): one view per 0.5 m at most, out to the line's far
+  // part (a cell beyond x = 2.75 m is seen through the gap only within 5 deg of the line), then
+  // nothing is left to look at.
+  EXPECT_GE(views, 2);
+  EXPECT_LE(views, 3);
+  EXPECT_GT(far_target, 2.75f);
+  EXPECT_EQ(e.stats().view_goals, views);
+  EXPECT_EQ(e.state(), duet::ExplorerState::kDone);
+  EXPECT_EQ(e.stop_status(), duet::ExplorationStatus::kAllUnreachable);
+}
+
+// A view goal the robot cannot get to is abandoned like any goal; its frontier cell is then not
+// looked at again either.
+TEST(Explorer, AbandonedViewGoalIsNotTriedAgain) {
+  const duet::Profile p = frontier_only_profile();
+  duet::ExplorerSettings s;
+  s.final_retries = 0;
+  s.goal_timeout_s = 1.0f;
+  duet::Explorer e(p, s);
+  const duet::OccupancyGrid g = room_with_a_crack();
+  const duet::Pose2 start{0.6f, 0.6f, 1.0f};
+  e.update_map(g, start, 0.0);
+  (void)e.control(start, duet::Twist{}, 0.0);
+  ASSERT_TRUE(e.goal().has_value());
+  ASSERT_TRUE(e.decisions().back().view);
+  const Eigen::Vector2f first_target = e.decisions().back().view_target;
+  // The time limit passes with the robot not moving.
+  (void)e.control(start, duet::Twist{}, 100.0);
+  EXPECT_FALSE(e.goal().has_value());
+  EXPECT_EQ(e.stats().goals_abandoned_timeout, 1);
+  (void)e.control(start, duet::Twist{}, 100.05);
+  // Another view goal, for another frontier cell, or none.
+  if (e.goal().has_value()) {
+    EXPECT_TRUE(e.decisions().back().view);
+    EXPECT_GT((e.decisions().back().view_target - first_target).norm(), p.exploration.strategy.frontier.blacklist_radius_m);
+  }
+  EXPECT_EQ(e.stats().view_goals_reached, 0);
+}
+
+
+// A loop closure moves the map frame: the goal, its path and the recent obstacles move by the
+// same shift (new = D * old); a non-finite shift is refused and moves nothing.
+TEST(Explorer, ShiftFrameMovesTheGoalThePathAndTheRecentObstacles) {
+  const duet::Profile p = frontier_only_profile();
+  duet::Explorer e(p);
+  decide_in_half_known_room(e);
+  ASSERT_TRUE(e.goal().has_value());
+  ASSERT_FALSE(e.path().empty());
+  const std::vector<Eigen::Vector2f> recent{{2.0f, 2.0f}};
+  e.set_recent_obstacles(recent);
+  ASSERT_EQ(e.recent_obstacles().size(), 1u);
+  const duet::Pose2 goal = *e.goal();
+  const std::vector<Eigen::Vector2f> path = e.path();
+  const duet::Pose2 D{0.3f, -0.2f, 0.05f};
+  EXPECT_THROW(e.shift_frame(duet::Pose2{std::nanf(""), 0.0f, 0.0f}), duet::Error);
+  EXPECT_EQ(e.goal()->x, goal.x);
+  e.shift_frame(D);
+  const duet::Pose2 want = duet::compose(D, goal);
+  EXPECT_NEAR(e.goal()->x, want.x, 1e-5f);
+  EXPECT_NEAR(e.goal()->y, want.y, 1e-5f);
+  EXPECT_NEAR(e.goal()->theta, want.theta, 1e-5f);
+  ASSERT_EQ(e.path().size(), path.size());
+  for (std::size_t k = 0; k < path.size(); ++k) {
+    const duet::Pose2 q = duet::compose(D, duet::Pose2{path[k].x(), path[k].y(), 0.0f});
+    EXPECT_NEAR(e.path()[k].x(), q.x, 1e-5f);
+    EXPECT_NEAR(e.path()[k].y(), q.y, 1e-5f);
+  }
+  const duet::Pose2 r = duet::compose(D, duet::Pose2{2.0f, 2.0f, 0.0f});
+  EXPECT_NEAR(e.recent_obstacles()[0].x(), r.x, 1e-5f);
+  EXPECT_NEAR(e.recent_obstacles()[0].y(), r.y, 1e-5f);
+}
+
+
+TEST(Explorer, CommandNeverExceedsTheChassisWhateverTheOdometrySays) {
+  // A glitched measured twist (100 m/s, 100 rad/s) reaches every behaviour that works from it -
+  // the window, the turn to a goal's heading, the escapes: the command stays within the chassis.
+  const duet::Profile p = frontier_only_profile();
+  duet::Explorer e(p);
+  decide_in_half_known_room(e);
+  ASSERT_TRUE(e.goal().has_value());
+  const float v_max = p.chassis.max_linear_speed_mps, w_max = p.chassis.max_angular_speed_radps();
+  double t = 0.1;
+  for (const duet::Twist glitch : {duet::Twist{100.0f, 0.0f}, duet::Twist{-100.0f, 3.0f}, duet::Twist{0.2f, 100.0f},
+                                   duet::Twist{0.0f, -100.0f}}) {
+    for (const duet::Pose2 at : {duet::Pose2{1.0f, 1.5f, 0.0f}, duet::Pose2{e.goal()->x, e.goal()->y, e.goal()->theta + 1.0f}}) {
+      const duet::Twist cmd = e.control(at, glitch, t);
+      t += 0.05;
+      EXPECT_LE(std::fabs(cmd.v), v_max) << glitch.v << " " << glitch.omega;
+      EXPECT_LE(std::fabs(cmd.omega), w_max) << glitch.v << " " << glitch.omega;
+    }
+  }
+}
+}  // namespace test_explorer_motion
