@@ -34,7 +34,7 @@ if [ "${DUET_SKIP_SANITIZERS:-0}" != 1 ] && [ "$(id -u)" = 0 ]; then
   for p in $sanitizer_pkgs; do
     if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
       mkdir -p "$here/build"
-      (DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $sanitizer_pkgs > "$here/build/apt-clang.log" 2>&1) &
+      (DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends -o DPkg::Lock::Timeout=600 $sanitizer_pkgs > "$here/build/apt-clang.log" 2>&1) &
       clang_install=$!
       break
     fi
