@@ -30,15 +30,10 @@ echo "== duet: Release build and tests"
 sanitizer_pkgs="clang-14 libclang-rt-14-dev"
 clang_install=""
 DUET_SETUP_PACKAGES_ONLY=1 "$here/scripts/setup.sh"
-if [ "${DUET_SKIP_SANITIZERS:-0}" != 1 ] && [ "$(id -u)" = 0 ]; then
-  for p in $sanitizer_pkgs; do
-    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
-      mkdir -p "$here/build"
-      (DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends -o DPkg::Lock::Timeout=600 $sanitizer_pkgs > "$here/build/apt-clang.log" 2>&1) &
-      clang_install=$!
-      break
-    fi
-  done
+if [ "${DUET_SKIP_SANITIZERS:-0}" != 1 ]; then
+  mkdir -p "$here/build"
+  DUET_EXTRA_PKGS="$sanitizer_pkgs" DUET_SETUP_PACKAGES_ONLY=1 "$here/scripts/setup.sh" > "$here/build/apt-clang.log" 2>&1 &
+  clang_install=$!
 fi
 "$here/scripts/setup.sh" "$here/build" "$shards"
 (cd "$here/build" && ctest --output-on-failure -j "$jobs" --timeout 900)
