@@ -61,6 +61,7 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                 {"stalls", e.stalls},
                 {"view_goals", e.view_goals},
                 {"view_goals_reached", e.view_goals_reached},
+                {"frontier_goals_seen", e.frontier_goals_seen},
                 {"patrol_waypoints", e.patrol_waypoints},
                 {"patrol_reached", e.patrol_reached},
                 {"patrol_skipped", e.patrol_skipped},

@@ -123,6 +123,47 @@ TEST(Explorer, GoalIsMovedAgainWhenTheMapClosesAroundIt) {
   EXPECT_EQ(e.stats().goals_abandoned_blocked, 0);
 }
 
+// A frontier goal whose frontier the sensors saw past before the robot got there ends at the
+// next map update (frontier_seen_radius_m) and the next decision takes the new frontier; a map
+// that still shows the frontier keeps the goal, and with the radius 0 the robot drives on to it.
+TEST(Explorer, FrontierGoalEndsWhenItsFrontierIsSeenOnTheWay) {
+  const duet::Profile p = frontier_only_profile();
+  const duet::Pose2 robot{1.0f, 1.5f, 0.0f};
+  duet::OccupancyGrid seen = half_known_room();  // 0.5 m more of the room seen: frontier at x = 4.5 m
+  for (int y = 0; y < seen.height(); ++y)
+    for (int x = 80; x < 90; ++x) seen.logodds()[seen.index(x, y)] = -2.0f;
+  for (const float radius : {0.3f, 0.0f}) {
+    SCOPED_TRACE(radius);
+    duet::ExplorerSettings s;
+    s.frontier_seen_radius_m = radius;
+    duet::Explorer e(p, s);
+    decide_in_half_known_room(e);
+    ASSERT_TRUE(e.goal().has_value());
+    const duet::Pose2 first = *e.goal();
+    e.update_map(half_known_room(), robot, 1.0);  // nothing new: the goal stays
+    ASSERT_TRUE(e.goal().has_value());
+    EXPECT_EQ(e.goal()->x, first.x);
+    EXPECT_EQ(e.stats().frontier_goals_seen, 0);
+    e.update_map(seen, robot, 2.0);
+    if (radius > 0.0f) {
+      EXPECT_FALSE(e.goal().has_value());
+      EXPECT_EQ(e.stats().frontier_goals_seen, 1);
+      EXPECT_EQ(e.stats().goals_reached, 0);  // not reached: nothing is blacklisted for it
+      (void)e.control(robot, duet::Twist{}, 2.0);
+      ASSERT_TRUE(e.goal().has_value());  // decided at once, towards the new frontier
+      EXPECT_GT(e.last_decision().goal.x, 4.4f);
+      EXPECT_GT(e.goal()->x, first.x + 0.4f);
+    } else {
+      ASSERT_TRUE(e.goal().has_value());
+      EXPECT_EQ(e.goal()->x, first.x);
+      EXPECT_EQ(e.stats().frontier_goals_seen, 0);
+    }
+  }
+  duet::ExplorerSettings bad;
+  bad.frontier_seen_radius_m = -0.1f;
+  EXPECT_THROW(duet::Explorer(p, bad), duet::Error);
+}
+
 TEST(Explorer, GoalWithNoStandingRoomNearbyIsAbandoned) {
   const duet::Profile p = frontier_only_profile();
   duet::ExplorerSettings s;

@@ -141,6 +141,7 @@ void goal_fields(V& v, ExplorerSettings& s) {
   v("view_relook_after_s", s.view_relook_after_s);
   v("view_relook_dwell_s", s.view_relook_dwell_s);
   v("look_with_any_sensor", s.look_with_any_sensor);
+  v("frontier_seen_radius_m", s.frontier_seen_radius_m);
   v("recent_obstacles_s", s.recent_obstacles_s);
   v("recent_obstacle_range_m", s.recent_obstacle_range_m);
   v("recent_obstacle_min_scans", s.recent_obstacle_min_scans);

@@ -143,6 +143,7 @@ void Navigator::shift(const Pose2& D) {
   auto move = [&](Eigen::Vector2f& p) { p = transform_point(D, p); };
   for (Eigen::Vector2f& p : path_) move(p);
   move(goal_target_);
+  if (goal_frontier_) move(*goal_frontier_);
   planning_costmap_.shift(D);
   local_costmap_.shift(D);
   for (const auto& st : strategies_) st->shift(D);
@@ -176,6 +177,11 @@ void Navigator::update_map(const OccupancyGrid& grid, const Pose2& robot, double
   have_map_ = true;
   if (state_ == ExplorerState::kIdle) state_ = ExplorerState::kExploring;
   wait_for_map_ = false;  // a decision that found nothing may try again on the new map
+  if (goal_ && goal_frontier_ && frontier_seen()) {
+    // Its frontier was seen on the way: nothing new to see there; the next decision follows now.
+    ++stats_.frontier_goals_seen;
+    drop_goal();
+  }
   if (goal_) {
     // The goal cell became an obstacle (or its inflation, or the margin of unknown cells) and no
     // cell near it will do: abandon; else re-plan on the new map.
@@ -312,7 +318,25 @@ void Navigator::stop(const std::string& why) {
   stop_detail_ = why;
 }
 
+bool Navigator::frontier_seen() const {
+  const InflatedGrid& g = inflated();
+  const float r = settings_.frontier_seen_radius_m;
+  const Eigen::Vector2i c = g.cell_of(*goal_frontier_);
+  const int rc = static_cast<int>(std::ceil(r / g.resolution_m));
+  auto unknown = [&](int x, int y) { return g.in_bounds(x, y) && g.state[g.index(x, y)] == CellState::kUnknown; };
+  for (int y = c.y() - rc; y <= c.y() + rc; ++y)
+    for (int x = c.x() - rc; x <= c.x() + rc; ++x) {
+      if (!g.in_bounds(x, y) || g.state[g.index(x, y)] != CellState::kFree) continue;
+      if ((g.cell_center(g.index(x, y)) - *goal_frontier_).norm() > r) continue;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx)
+          if ((dx != 0 || dy != 0) && unknown(x + dx, y + dy)) return false;  // still a frontier cell
+    }
+  return true;
+}
+
 void Navigator::drop_goal() {
+  goal_frontier_.reset();
   goal_.reset();
   active_ = kNone;
   path_.clear();
@@ -378,6 +402,9 @@ void Navigator::decide(const Pose2& robot, double now_s) {
       goal_->theta = heading_to_look(goal_->theta, from, sectors_);
       log_.back().goal = *goal_;
     }
+    if (frontier_goal && settings_.frontier_seen_radius_m > 0.0f && decision_.frontier_searched &&
+        decision_.frontier.status == FrontierStatus::kFound)
+      goal_frontier_ = decision_.frontier.target_xy;
     if (proposal->kind == GoalKind::kView) ++stats_.view_goals;
     else if (proposal->kind == GoalKind::kSimulated) ++stats_.simulated_goals;
     else ++stats_.frontier_goals;

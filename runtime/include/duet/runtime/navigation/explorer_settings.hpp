@@ -81,6 +81,12 @@ struct ExplorerSettings {
   /// worse still for view goals (a side sensor sits 0.12 m off their line of sight through a
   /// gap), which it never turns.
   bool look_with_any_sensor = false;
+  /// A frontier goal ends as soon as the map shows no frontier cell within frontier_seen_radius_m
+  /// of the frontier cell it was for: a sensor saw past that frontier on the way (the side sensor
+  /// sweeps frontiers the robot drives by), so driving on to it and turning there would show
+  /// nothing new. The robot decides again at once (explore_lite re-plans the same way when its goal's frontier
+  /// disappears). [m], [0, 5]; 0 = off (drive to every frontier goal and look from there).
+  float frontier_seen_radius_m = 0.3f;
   /// Recent obstacles (a local costmap's obstacle layer): cells an obstacle point of the last
   /// recent_obstacles_s seconds fell in block the dynamic window's grid, whatever the map's
   /// log-odds say (where the pose moved since a place was mapped, the map needs several hits to
@@ -156,6 +162,7 @@ struct ExplorerStats {
   int stalls = 0;                   ///< stalls detected: contact obstacles placed
   int view_goals = 0;               ///< view goals taken
   int view_goals_reached = 0;       ///< of view_goals, those reached and looked from
+  int frontier_goals_seen = 0;      ///< frontier goals ended on the way: their frontier was seen (frontier_seen_radius_m)
   int patrol_waypoints = 0;         ///< waypoints of the patrol round (OnDone::kPatrol)
   int patrol_reached = 0;           ///< patrol waypoints reached
   int patrol_skipped = 0;           ///< patrol waypoints given up (no path, time limit, stuck, blocked)

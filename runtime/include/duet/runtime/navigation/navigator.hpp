@@ -192,6 +192,8 @@ class Navigator {
   /// The goal and its path are set: its deadline (the time limit plus the path at the nominal
   /// speed) and a new goal id.
   void start_goal(double now_s);
+  /// No frontier cell of the planning grid within frontier_seen_radius_m of goal_frontier_.
+  [[nodiscard]] bool frontier_seen() const;
   /// A goal at `target` (already in map frame), its path, its deadline; false without a path.
   bool set_goal_to(const Eigen::Vector2f& target, const Pose2& robot, double now_s);
 
@@ -218,6 +220,8 @@ class Navigator {
   std::optional<Pose2> goal_;
   std::uint64_t goal_id_ = 0;
   Eigen::Vector2f goal_target_{0.0f, 0.0f};
+  /// The frontier cell a frontier goal is for (frontier_seen()); empty for other goals.
+  std::optional<Eigen::Vector2f> goal_frontier_;
   std::vector<Eigen::Vector2f> path_;
   double goal_deadline_s_ = 0.0;
   int no_goal_decisions_ = 0;
