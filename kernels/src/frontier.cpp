@@ -333,6 +333,34 @@ std::size_t frontier_mask(std::span<const CellState> state, int width, int heigh
   return detail::frontier_mask_isa(state, width, height, mask, true);
 }
 
+bool any_frontier_cell_within(const InflatedGrid& g, const Eigen::Vector2f& xy, float radius_m) {
+  if (!xy.allFinite()) fail(ErrorCode::kInvalidArgument, "any_frontier_cell_within: xy must be finite");
+  if (!std::isfinite(radius_m) || !(radius_m >= 0.0f))
+    fail(ErrorCode::kInvalidArgument, "any_frontier_cell_within: radius_m must be finite and >= 0 [m], got " + std::to_string(radius_m));
+  if (g.width < 0 || g.height < 0 || g.state.size() != g.cell_count())
+    fail(ErrorCode::kInvalidArgument, "any_frontier_cell_within: grid state has " + std::to_string(g.state.size()) +
+                                          " cells, width * height is " + std::to_string(g.cell_count()));
+  if (g.cell_count() == 0) return false;
+  // The square of cells whose centres can lie within the radius, clamped to the grid (in float
+  // first: xy may be far outside it).
+  const float inv = 1.0f / g.resolution_m;
+  const auto clamp_cell = [](float v, int n) { return static_cast<int>(std::clamp(std::floor(v), -1.0f, static_cast<float>(n))); };
+  const int x0 = std::max(0, clamp_cell((xy.x() - radius_m - g.origin.x()) * inv, g.width));
+  const int x1 = std::min(g.width - 1, clamp_cell((xy.x() + radius_m - g.origin.x()) * inv, g.width));
+  const int y0 = std::max(0, clamp_cell((xy.y() - radius_m - g.origin.y()) * inv, g.height));
+  const int y1 = std::min(g.height - 1, clamp_cell((xy.y() + radius_m - g.origin.y()) * inv, g.height));
+  auto unknown = [&](int x, int y) { return g.in_bounds(x, y) && g.state[g.index(x, y)] == CellState::kUnknown; };
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) {
+      if (g.state[g.index(x, y)] != CellState::kFree) continue;
+      if ((g.cell_center(g.index(x, y)) - xy).norm() > radius_m) continue;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx)
+          if ((dx != 0 || dy != 0) && unknown(x + dx, y + dy)) return true;
+    }
+  return false;
+}
+
 std::size_t detail::frontier_mask_isa(const GridView& grid, const CellThresholds& t, std::span<std::uint8_t> mask, bool allow_avx2) {
   validate(grid, "frontier_mask: grid");
   validate(t);

@@ -397,6 +397,58 @@ TEST(Frontier, MaskThreadCountIndependent) {
   EXPECT_GT(na, 100u);
 }
 
+TEST(Frontier, AnyFrontierCellWithinMatchesTheMask) {
+  // Against a brute force over frontier_mask(): every cell's centre tested against the disc.
+  int hits = 0, misses = 0;
+  for (std::uint32_t seed = 1; seed <= 12; ++seed) {
+    const int w = 20 + int(seed % 4) * 25, h = 15 + int(seed % 3) * 20;
+    const TestGrid tg = explored(w, h, seed * 17);
+    InflatedGrid g;
+    inflate(tg.view(), InflationSettings{}, g);
+    std::vector<std::uint8_t> mask(g.cell_count());
+    frontier_mask(g.state, w, h, mask);
+    std::mt19937 rng(seed);
+    // Points inside and up to 1 m outside the grid; radii from 0 (one cell centre or none) to 2 m.
+    std::uniform_real_distribution<float> px(g.origin.x() - 1.0f, g.origin.x() + w * g.resolution_m + 1.0f);
+    std::uniform_real_distribution<float> py(g.origin.y() - 1.0f, g.origin.y() + h * g.resolution_m + 1.0f);
+    std::uniform_real_distribution<float> pr(0.0f, 2.0f);
+    for (int k = 0; k < 200; ++k) {
+      Eigen::Vector2f xy{px(rng), py(rng)};
+      float r = k % 10 == 0 ? 0.0f : pr(rng);
+      if (k % 10 == 1) {  // exactly on a cell centre, radius 0: that cell alone
+        xy = g.cell_center(static_cast<std::size_t>(rng() % g.cell_count()));
+        r = 0.0f;
+      }
+      bool ref = false;
+      for (std::size_t i = 0; i < g.cell_count() && !ref; ++i)
+        ref = mask[i] && (g.cell_center(i) - xy).norm() <= r;
+      EXPECT_EQ(any_frontier_cell_within(g, xy, r), ref) << "seed " << seed << " k " << k << " xy " << xy.transpose() << " r " << r;
+      (ref ? hits : misses) += 1;
+    }
+  }
+  EXPECT_GT(hits, 300);  // both answers are exercised
+  EXPECT_GT(misses, 300);
+  // Hand-made: the frontier cells of MaskMatchesReference's 4 x 3 grid are (2,1), (3,1), (2,2).
+  TestGrid tg = blank(4, 3, kFree);
+  tg.set(3, 2, kNaN);
+  InflatedGrid g;
+  inflate(tg.view(), InflationSettings{}, g);
+  EXPECT_TRUE(any_frontier_cell_within(g, g.cell_center(2, 1), 0.0f));
+  EXPECT_FALSE(any_frontier_cell_within(g, g.cell_center(0, 0), 0.0f));
+  EXPECT_FALSE(any_frontier_cell_within(g, g.cell_center(0, 0), 0.09f));  // (2,1) is 0.112 m away
+  EXPECT_TRUE(any_frontier_cell_within(g, g.cell_center(0, 0), 0.12f));
+  EXPECT_FALSE(any_frontier_cell_within(g, {1e6f, -1e6f}, 1.0f));  // far outside
+  EXPECT_TRUE(any_frontier_cell_within(g, {1e6f, -1e6f}, 3e6f));   // a huge radius covers the grid
+  // Empty grid, bad arguments.
+  EXPECT_FALSE(any_frontier_cell_within(InflatedGrid{}, {0.0f, 0.0f}, 1.0f));
+  EXPECT_DUET_ERROR((void)any_frontier_cell_within(g, {NAN, 0.0f}, 1.0f), ErrorCode::kInvalidArgument, "xy");
+  EXPECT_DUET_ERROR((void)any_frontier_cell_within(g, {0.0f, 0.0f}, -1.0f), ErrorCode::kInvalidArgument, "radius_m");
+  EXPECT_DUET_ERROR((void)any_frontier_cell_within(g, {0.0f, 0.0f}, INFINITY), ErrorCode::kInvalidArgument, "radius_m");
+  InflatedGrid bad = g;
+  bad.state.pop_back();
+  EXPECT_DUET_ERROR((void)any_frontier_cell_within(bad, {0.0f, 0.0f}, 1.0f), ErrorCode::kInvalidArgument, "state");
+}
+
 // ---- find_frontier vs reference ------------------------------------------------------------------------
 
 TEST(Frontier, MatchesReferenceOnRandomGrids) {

@@ -319,20 +319,7 @@ void Navigator::stop(const std::string& why) {
 }
 
 bool Navigator::frontier_seen() const {
-  const InflatedGrid& g = inflated();
-  const float r = settings_.frontier_seen_radius_m;
-  const Eigen::Vector2i c = g.cell_of(*goal_frontier_);
-  const int rc = static_cast<int>(std::ceil(r / g.resolution_m));
-  auto unknown = [&](int x, int y) { return g.in_bounds(x, y) && g.state[g.index(x, y)] == CellState::kUnknown; };
-  for (int y = c.y() - rc; y <= c.y() + rc; ++y)
-    for (int x = c.x() - rc; x <= c.x() + rc; ++x) {
-      if (!g.in_bounds(x, y) || g.state[g.index(x, y)] != CellState::kFree) continue;
-      if ((g.cell_center(g.index(x, y)) - *goal_frontier_).norm() > r) continue;
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx)
-          if ((dx != 0 || dy != 0) && unknown(x + dx, y + dy)) return false;  // still a frontier cell
-    }
-  return true;
+  return !any_frontier_cell_within(inflated(), *goal_frontier_, settings_.frontier_seen_radius_m);
 }
 
 void Navigator::drop_goal() {

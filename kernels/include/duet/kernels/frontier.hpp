@@ -208,4 +208,12 @@ std::size_t frontier_mask(const GridView& grid, const CellThresholds& t, std::sp
 /// The same from already classified states (state.size() = width*height).
 std::size_t frontier_mask(std::span<const CellState> state, int width, int height, std::span<std::uint8_t> mask);
 
+/// True iff some frontier cell (as frontier_mask() defines it: kFree with a kUnknown 8-neighbour
+/// inside the grid) has its centre within radius_m of xy (Euclidean, inclusive). Looks only at the
+/// cells of the square around xy (O(radius^2), no mask). Used to end a frontier goal once its
+/// frontier has been seen on the way. xy may lie outside the grid. Throws
+/// duet::Error(kInvalidArgument) if xy or radius_m is not finite, radius_m < 0, or g.state does not
+/// hold width * height cells. Reentrant.
+[[nodiscard]] bool any_frontier_cell_within(const InflatedGrid& g, const Eigen::Vector2f& xy, float radius_m);
+
 }  // namespace duet
