@@ -265,6 +265,49 @@ TEST(Grid, RaysToHighObstaclePointsDoNotClear) {
   EXPECT_THROW(validate(s), Error);
 }
 
+TEST(Grid, RaysDoNotEraseOccupiedCellsNearTheSensor) {
+  // A post at cell (5, 5), 0.3 m from the sensor at (0.25, 0.55) - nearer than a Kinect's minimum
+  // depth, so it returns no point; a ray to a floor point beyond runs through its cell.
+  GridUpdateSettings s;
+  s.grow_margin_cells = 0;
+  GridUpdateWorkspace ws;
+  const Eigen::Vector2f sensor(0.25f, 0.55f);
+  const std::vector<Eigen::Vector3f> post{{0.55f, 0.55f, 0.3f}}, beyond{{1.55f, 0.55f, 0.0f}};
+  const std::vector<PointLabel> obstacle{PointLabel::kObstacle}, floor_l{PointLabel::kFloor};
+  for (const float keep : {0.0f, 0.35f}) {
+    SCOPED_TRACE(keep);
+    s.keep_occupied_within_m = keep;
+    OccupancyGrid g(0.1f, Eigen::Vector2f(0, 0), 20, 10);
+    update_grid(g, sensor, post, obstacle, s, ws);
+    update_grid(g, sensor, post, obstacle, s, ws);
+    ASSERT_FLOAT_EQ(g.at(5, 5), 1.7f);
+    update_grid(g, sensor, beyond, floor_l, s, ws);  // the ray crosses cells 2..14 of row 5
+    // Off: the post's cell is lowered like any other; on: kept. Cells beyond it (6..14) and the
+    // free ones nearer (2..4: log-odds <= 0, cleared by all three rays) are cleared either way.
+    EXPECT_FLOAT_EQ(g.at(5, 5), keep > 0.0f ? 1.7f : 1.3f);
+    for (int x = 2; x < 5; ++x) EXPECT_FLOAT_EQ(g.at(x, 5), -1.2f) << x;
+    for (int x = 6; x < 15; ++x) EXPECT_FLOAT_EQ(g.at(x, 5), -0.4f) << x;
+  }
+  // The limit is inclusive and measured to the cell's centre: (0.55, 0.55) is 0.3 m away.
+  for (const auto& [keep, want] : std::vector<std::pair<float, float>>{{0.3f, 0.85f}, {0.29f, 0.45f}}) {
+    s.keep_occupied_within_m = keep;
+    OccupancyGrid g(0.1f, Eigen::Vector2f(0, 0), 20, 10);
+    update_grid(g, sensor, post, obstacle, s, ws);
+    update_grid(g, sensor, beyond, floor_l, s, ws);
+    EXPECT_FLOAT_EQ(g.at(5, 5), want) << keep;
+  }
+  // A hit or a floor point in the cell still counts: a floor point there lowers it.
+  s.keep_occupied_within_m = 1.0f;
+  OccupancyGrid g(0.1f, Eigen::Vector2f(0, 0), 20, 10);
+  update_grid(g, sensor, post, obstacle, s, ws);
+  update_grid(g, sensor, std::vector<Eigen::Vector3f>{{0.55f, 0.55f, 0.0f}}, floor_l, s, ws);
+  EXPECT_FLOAT_EQ(g.at(5, 5), 0.45f);
+  for (const float bad : {-0.1f, NAN, INFINITY}) {
+    s.keep_occupied_within_m = bad;
+    EXPECT_THROW(validate(s), Error) << bad;
+  }
+}
+
 TEST(Grid, OneUpdatePerCellPerCallAndHitWins) {
   OccupancyGrid g(0.1f, Eigen::Vector2f(0, 0), 30, 10);
   GridUpdateSettings s;
