@@ -120,6 +120,8 @@ void validate(const GridUpdateSettings& s) {
   if (!std::isfinite(s.keep_occupied_within_m) || !(s.keep_occupied_within_m >= 0.0f))
     fail(ErrorCode::kInvalidArgument,
          "GridUpdateSettings.keep_occupied_within_m must be finite and >= 0 [m], got " + std::to_string(s.keep_occupied_within_m));
+  if (!std::isfinite(s.keep_occupied_logodds))
+    fail(ErrorCode::kInvalidArgument, "GridUpdateSettings.keep_occupied_logodds must be finite, got " + std::to_string(s.keep_occupied_logodds));
   if (std::isnan(s.clear_max_height_m))
     fail(ErrorCode::kInvalidArgument, "GridUpdateSettings.clear_max_height_m must not be NaN (+inf: every ray clears)");
   if (s.grow_margin_cells < 0 || s.grow_margin_cells > 100000)
@@ -223,6 +225,7 @@ void update_grid(OccupancyGrid& grid, const Eigen::Vector2f& sensor_xy, PointsVi
   const float lmin = settings.min_logodds, lmax = settings.max_logodds;
   std::span<float> cells = grid.logodds();
   const float keep_r2 = settings.keep_occupied_within_m * settings.keep_occupied_within_m;
+  const float keep_l = settings.keep_occupied_logodds;
   detail::for_each_index(static_cast<std::size_t>(bh), 16, [&](std::size_t row) {
     for (int col = 0; col < bw; ++col) {
       const std::size_t w = row * static_cast<std::size_t>(bw) + static_cast<std::size_t>(col);
@@ -231,7 +234,7 @@ void update_grid(OccupancyGrid& grid, const Eigen::Vector2f& sensor_xy, PointsVi
       else if (end_free[w] || ray_free[w]) delta = ml;
       else continue;
       float& l = cells[grid.index(c0.x() + col, c0.y() + static_cast<int>(row))];
-      if (keep_r2 > 0.0f && !hit[w] && !end_free[w] && l > 0.0f &&
+      if (keep_r2 > 0.0f && !hit[w] && !end_free[w] && l > keep_l &&
           (grid.cell_center(c0.x() + col, c0.y() + static_cast<int>(row)) - sensor_xy).squaredNorm() <= keep_r2)
         continue;  // a ray beside an obstacle too near for the sensor: kept (keep_occupied_within_m)
       l = std::clamp((std::isnan(l) ? 0.0f : l) + delta, lmin, lmax);

@@ -296,6 +296,18 @@ TEST(Grid, RaysDoNotEraseOccupiedCellsNearTheSensor) {
     update_grid(g, sensor, beyond, floor_l, s, ws);
     EXPECT_FLOAT_EQ(g.at(5, 5), want) << keep;
   }
+  // keep_occupied_logodds: only cells above it are kept - two hits (1.7) are not above 2, three (2.55) are.
+  s.keep_occupied_within_m = 1.0f;
+  s.keep_occupied_logodds = 2.0f;
+  for (const auto& [hits, want] : std::vector<std::pair<int, float>>{{2, 1.3f}, {3, 2.55f}}) {
+    OccupancyGrid g(0.1f, Eigen::Vector2f(0, 0), 20, 10);
+    for (int k = 0; k < hits; ++k) update_grid(g, sensor, post, obstacle, s, ws);
+    update_grid(g, sensor, beyond, floor_l, s, ws);
+    EXPECT_FLOAT_EQ(g.at(5, 5), want) << hits << " hits";
+  }
+  s.keep_occupied_logodds = NAN;
+  EXPECT_THROW(validate(s), Error);
+  s.keep_occupied_logodds = 0.0f;
   // A hit or a floor point in the cell still counts: a floor point there lowers it.
   s.keep_occupied_within_m = 1.0f;
   OccupancyGrid g(0.1f, Eigen::Vector2f(0, 0), 20, 10);

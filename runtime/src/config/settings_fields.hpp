@@ -325,6 +325,7 @@ void fields(V& v, MappingSettings& m) {
     w("clear_along_rays", g.clear_along_rays);
     w.up_to_inf("clear_max_height_m", g.clear_max_height_m);  // .inf (the default): every ray clears
     w("keep_occupied_within_m", g.keep_occupied_within_m);
+    w("keep_occupied_logodds", g.keep_occupied_logodds);
     w("max_ray_length_m", g.max_ray_length_m);
     w("grow_margin_cells", g.grow_margin_cells);
   });

@@ -98,12 +98,16 @@ struct GridUpdateSettings {
   /// at most this high cannot pass over an obstacle taller than this and the sensor. Not NaN.
   float clear_max_height_m = std::numeric_limits<float>::infinity();
   float max_ray_length_m = 8.0f;///< hits farther than this from the sensor are ignored [m]
-  /// Rays do not lower a cell more likely occupied than free (log-odds > 0) whose centre lies
+  /// Rays do not lower a cell whose log-odds is above keep_occupied_logodds and whose centre lies
   /// within this distance of the sensor [m, 2D], >= 0; 0 = off (the default). A thin obstacle
   /// nearer than the sensor's minimum depth returns no point to keep it, while the rays passing
   /// beside it cross its cell (a 2D cell is cleared when a ray crosses any part of it): without
   /// this a robot erases a post as it passes it. Hits and floor points in the cell still count.
   float keep_occupied_within_m = 0.0f;
+  /// The log-odds a cell must exceed to be kept (keep_occupied_within_m), finite; 0 = every cell
+  /// more likely occupied than free. Higher keeps only obstacles seen several times, not the
+  /// single noisy hits beside a wall that the rays along it would clear.
+  float keep_occupied_logodds = 0.0f;
   int grow_margin_cells = 40;   ///< growth step around new data [cells]
 };
 
@@ -118,8 +122,8 @@ struct GridUpdateWorkspace {
 /// clear_max_height_m is free. Each cell gets at most
 /// one update per call: hit if any obstacle point falls in it, else miss (OctoMap's
 /// computeUpdate semantics); rays run to the centre of each distinct end cell.
-/// With keep_occupied_within_m > 0, a cell only a ray cleared keeps its log-odds when it is > 0
-/// and the cell's centre lies within that distance of sensor_xy.
+/// With keep_occupied_within_m > 0, a cell only a ray cleared keeps its log-odds when it is above
+/// keep_occupied_logodds and the cell's centre lies within that distance of sensor_xy.
 /// kIgnored and non-finite points are skipped. labels has points.size() entries.
 void update_grid(OccupancyGrid& grid, const Eigen::Vector2f& sensor_xy, PointsView points,
                  std::span<const PointLabel> labels, const GridUpdateSettings& settings,

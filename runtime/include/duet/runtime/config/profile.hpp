@@ -108,7 +108,8 @@ struct SensorProfile {
 ///   segmentation:    {floor_z_m, max_floor_tilt_deg, floor_height_threshold_m, min_height_m,
 ///                     max_height_m, clustering: {tolerance_m, min_size, max_size}}
 ///   grid_update:     {hit_logodds, miss_logodds, min_logodds, max_logodds, clear_along_rays,
-///                     clear_max_height_m, keep_occupied_within_m, max_ray_length_m, grow_margin_cells}
+///                     clear_max_height_m, keep_occupied_within_m, keep_occupied_logodds,
+///                     max_ray_length_m, grow_margin_cells}
 ///   grid_resolution_m
 struct MappingSettings {
   BackProjectionSettings back_projection;
