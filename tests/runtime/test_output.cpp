@@ -64,9 +64,11 @@ TEST(Output, AWriterKilledMidWriteLeavesThePreviousFileOrTheNewOneWhole) {
   std::string payload(kSize, 'a');  // allocated before fork(): the child only fills and writes it
   // Fixed delays (no randomness). The first five land inside a write on a typical machine; on a
   // slow one (a VM where the child's copy-on-write page faults of the 48 MiB take > 150 ms) the
-  // longer ones do. The loop stops once a kill landed inside a write after the first five.
+  // longer ones do. The loop stops once a kill landed inside a write after the first five. On a
+  // loaded machine (2026-11-30: a sanitizer build and ctest -j2 on 2 cores) all nine once missed
+  // the writes: the off-beat delays after them give it more chances.
   int tried = 0;
-  for (const int delay_ms : {5, 20, 45, 90, 150, 300, 600, 1200, 2400}) {
+  for (const int delay_ms : {5, 20, 45, 90, 150, 300, 600, 1200, 2400, 7, 33, 71, 133, 257, 511, 1023, 3001}) {
     if (++tried > 5 && mid_write_kills > 0) break;
     const pid_t pid = ::fork();
     ASSERT_GE(pid, 0);
