@@ -1,7 +1,9 @@
-// OccupancyGrid + update_grid vs a serial reference written from the header (one update per cell
+// update_grid vs a serial reference written from the header (one update per cell
 // per call: hit if any obstacle point, else miss if any floor point's cell or any cell crossed by a
-// ray from the sensor to an end cell's centre; exact DDA in double); growth, clamping,
-// probabilities, ROS trinary values, ignored labels, max_ray_length, errors, thread counts.
+// ray from the sensor to an end cell's centre; exact DDA in double); rays to high points, obstacles
+// kept near the sensor, clamping, ignored labels, max_ray_length, errors, thread counts. The
+// OccupancyGrid type: test_occupancy_grid.cpp; accumulate_grid: test_accumulate_grid.cpp.
+#include "grid_test_util.hpp"
 #include "kernel_test_util.hpp"
 
 #include <duet/kernels/error.hpp>
@@ -23,6 +25,7 @@ namespace test_grid {
 using test::kInf;
 using test::kNaN;
 using Cell = std::pair<int, int>;
+using test::same_grid;
 
 // ---- reference -----------------------------------------------------------------------------------
 
@@ -96,23 +99,6 @@ RefStats reference_update(OccupancyGrid& g, const Eigen::Vector2f& sensor, const
   for (const Cell& c : miss)
     if (!hit.count(c)) apply(c, s.miss_logodds);
   return st;
-}
-
-::testing::AssertionResult same_grid(const OccupancyGrid& a, const OccupancyGrid& b) {
-  if (a.width() != b.width() || a.height() != b.height() || a.origin() != b.origin() || a.resolution() != b.resolution())
-    return ::testing::AssertionFailure() << "geometry differs: " << a.width() << "x" << a.height() << " at " << a.origin().transpose()
-                                         << " vs " << b.width() << "x" << b.height() << " at " << b.origin().transpose();
-  std::size_t diff = 0;
-  auto f = ::testing::AssertionFailure();
-  for (int y = 0; y < a.height(); ++y)
-    for (int x = 0; x < a.width(); ++x) {
-      const float u = a.at(x, y), v = b.at(x, y);
-      if (std::memcmp(&u, &v, sizeof(float)) != 0 && !(std::isnan(u) && std::isnan(v))) {
-        if (++diff <= 5) f << " cell (" << x << "," << y << "): " << u << " vs " << v << ";";
-      }
-    }
-  if (diff == 0) return ::testing::AssertionSuccess();
-  return f << " " << diff << " cells differ";
 }
 
 struct Scan {
@@ -402,140 +388,6 @@ TEST(Grid, IgnoredNonFiniteAndFarPointsAreSkipped) {
   EXPECT_TRUE(e.in_bounds(sc.x(), sc.y()));
 }
 
-// ---- tests: OccupancyGrid --------------------------------------------------------------------------
-
-TEST(Grid, GrowthKeepsCellsAtTheirWorldPosition) {
-  OccupancyGrid g(0.05f, Eigen::Vector2f(1.3f, -0.7f), 30, 20);
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<float> u(-2.0f, 3.5f);
-  std::vector<std::pair<Eigen::Vector2f, float>> marks;
-  for (int y = 0; y < g.height(); ++y)
-    for (int x = 0; x < g.width(); ++x) {
-      const float v = (x * 7 + y * 3) % 5 == 0 ? kNaN : u(rng);
-      g.logodds()[g.index(x, y)] = v;
-      marks.emplace_back(g.cell_center(x, y), v);
-    }
-  const float before_res = g.resolution();
-  const std::vector<std::pair<Eigen::Vector2f, Eigen::Vector2f>> boxes{
-      {{-3.013f, -4.007f}, {-2.011f, -3.512f}}, {{10.017f, 0.013f}, {12.019f, 1.011f}}, {{0.012f, 5.009f}, {0.113f, 9.021f}},
-      {{-20.007f, -20.013f}, {25.011f, 30.017f}}};
-  for (const auto& [lo, hi] : boxes) {
-    g.ensure_contains(lo, hi, 3);
-    EXPECT_EQ(g.resolution(), before_res);
-    EXPECT_EQ(g.cell_count(), static_cast<std::size_t>(g.width()) * static_cast<std::size_t>(g.height()));
-    // The box plus the margin is inside.
-    const Eigen::Vector2i a = g.cell_of(lo), b = g.cell_of(hi);
-    EXPECT_TRUE(g.in_bounds(a.x() - 3, a.y() - 3) && g.in_bounds(b.x() + 3, b.y() + 3));
-    // Every old cell holds its old value at its old world position.
-    std::size_t known = 0;
-    for (const auto& [xy, v] : marks) {
-      const Eigen::Vector2i c = g.cell_of(xy);
-      ASSERT_TRUE(g.in_bounds(c.x(), c.y()));
-      const float now = g.at(c.x(), c.y());
-      if (std::isnan(v)) {
-        EXPECT_TRUE(std::isnan(now));
-      } else {
-        EXPECT_EQ(now, v);
-        ++known;
-      }
-      EXPECT_LT((g.cell_center(c.x(), c.y()) - xy).norm(), 1e-4f);  // on the same lattice
-    }
-    EXPECT_EQ(g.known_cells(), known);  // new cells are unknown
-  }
-  // Already inside: no change.
-  const auto w = g.width(), h = g.height();
-  const Eigen::Vector2f o = g.origin();
-  g.ensure_contains(Eigen::Vector2f(0, 0), Eigen::Vector2f(1, 1), 2);
-  EXPECT_EQ(g.width(), w);
-  EXPECT_EQ(g.height(), h);
-  EXPECT_EQ(g.origin(), o);
-}
-
-TEST(Grid, GrowthFromEmptyAndLimits) {
-  OccupancyGrid g(0.1f);
-  EXPECT_EQ(g.cell_count(), 0u);
-  EXPECT_EQ(g.known_cells(), 0u);
-  g.ensure_contains(Eigen::Vector2f(-1.0f, 2.0f), Eigen::Vector2f(1.0f, 2.5f), 0);
-  EXPECT_GE(g.width(), 20);
-  EXPECT_GE(g.height(), 5);
-  EXPECT_LE(g.width(), 22);
-  EXPECT_LE(g.height(), 7);
-  EXPECT_EQ(g.known_cells(), 0u);
-  const auto kOut = ErrorCode::kOutOfRange;
-  const OccupancyGrid before = g;
-  EXPECT_DUET_ERROR(g.ensure_contains(Eigen::Vector2f(0, 0), Eigen::Vector2f(kNaN, 0), 0), kOut, "not finite");
-  EXPECT_DUET_ERROR(g.ensure_contains(Eigen::Vector2f(-1e7f, 0), Eigen::Vector2f(1e7f, 1), 0), kOut, "limit");
-  EXPECT_DUET_ERROR(g.ensure_contains(Eigen::Vector2f(0, 0), Eigen::Vector2f(100, 100), 0, 1000), kOut, "limit");
-  EXPECT_TRUE(same_grid(g, before));  // a failed growth changes nothing
-  EXPECT_DUET_ERROR(OccupancyGrid{0.0f}, ErrorCode::kInvalidArgument, "resolution");
-  EXPECT_DUET_ERROR(OccupancyGrid{kNaN}, ErrorCode::kInvalidArgument, "resolution");
-  EXPECT_DUET_ERROR(OccupancyGrid(0.1f, Eigen::Vector2f(0, 0), -1, 5), ErrorCode::kInvalidArgument, "size");
-  EXPECT_DUET_ERROR(OccupancyGrid(0.1f, Eigen::Vector2f(0, 0), 100000, 100000), kOut, "too large");
-}
-
-TEST(Grid, ProbabilitiesAndRosTrinary) {
-  OccupancyGrid g(0.1f, Eigen::Vector2f(0, 0), 8, 1);
-  const std::vector<float> l{kNaN, 0.0f, 3.5f, -2.0f, 0.85f, -0.4f, 0.61f, -1.41f};
-  std::copy(l.begin(), l.end(), g.logodds().begin());
-  std::vector<float> p(8);
-  g.to_probabilities(p);
-  EXPECT_EQ(p[0], -1.0f);
-  for (std::size_t i = 1; i < l.size(); ++i) EXPECT_NEAR(p[i], 1.0 / (1.0 + std::exp(-static_cast<double>(l[i]))), 1e-6) << i;
-  EXPECT_FLOAT_EQ(p[1], 0.5f);
-  std::vector<std::int8_t> t(8);
-  g.to_ros_trinary(t);
-  // Defaults 0.65 / 0.45. p: -, 0.5, 0.971, 0.119, 0.701, 0.401, 0.648 (< 0.65), 0.196
-  EXPECT_EQ(t, (std::vector<std::int8_t>{-1, -1, 100, 0, 100, 0, -1, 0}));
-  g.to_ros_trinary(t, 0.65f, 0.196f);  // map_server's thresholds: 0.19624 > 0.196
-  EXPECT_EQ(t, (std::vector<std::int8_t>{-1, -1, 100, 0, 100, -1, -1, -1}));
-  // Reference on random values away from the thresholds.
-  OccupancyGrid r(0.1f, Eigen::Vector2f(0, 0), 100, 100);
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<float> u(-4.0f, 4.0f);
-  for (auto& x : r.logodds()) x = rng() % 10 == 0 ? kNaN : u(rng);
-  std::vector<float> rp(r.cell_count());
-  std::vector<std::int8_t> rt(r.cell_count());
-  r.to_probabilities(rp);
-  r.to_ros_trinary(rt, 0.7f, 0.3f);
-  for (std::size_t i = 0; i < rp.size(); ++i) {
-    const float x = r.logodds()[i];
-    if (std::isnan(x)) {
-      EXPECT_EQ(rp[i], -1.0f);
-      EXPECT_EQ(rt[i], -1);
-      continue;
-    }
-    const double pr = 1.0 / (1.0 + std::exp(-static_cast<double>(x)));
-    EXPECT_NEAR(rp[i], pr, 1e-6);
-    if (std::abs(pr - 0.7) < 1e-5 || std::abs(pr - 0.3) < 1e-5) continue;
-    EXPECT_EQ(rt[i], pr >= 0.7 ? 100 : pr <= 0.3 ? 0 : -1) << "log-odds " << x;
-  }
-  // Size and threshold errors.
-  std::vector<float> small(3);
-  std::vector<std::int8_t> small_t(3);
-  const auto kInv = ErrorCode::kInvalidArgument;
-  EXPECT_DUET_ERROR(g.to_probabilities(small), kInv, "entries");
-  EXPECT_DUET_ERROR(g.to_ros_trinary(small_t), kInv, "entries");
-  EXPECT_DUET_ERROR(g.to_ros_trinary(t, 0.3f, 0.6f), kInv, "threshold");
-  EXPECT_DUET_ERROR(g.to_ros_trinary(t, 1.5f, 0.2f), kInv, "threshold");
-  // free_threshold 0: nothing is free; occupied 1: only p = 1 (never reached from finite log-odds).
-  g.to_ros_trinary(t, 1.0f, 0.0f);
-  EXPECT_EQ(std::count(t.begin(), t.end(), 0), 0);
-}
-
-TEST(Grid, CellOfAndCenter) {
-  const OccupancyGrid g(0.25f, Eigen::Vector2f(-1.0f, 2.0f), 10, 10);
-  EXPECT_EQ(g.cell_of(Eigen::Vector2f(-1.0f, 2.0f)), Eigen::Vector2i(0, 0));
-  EXPECT_EQ(g.cell_of(Eigen::Vector2f(-0.76f, 2.26f)), Eigen::Vector2i(0, 1));
-  EXPECT_EQ(g.cell_of(Eigen::Vector2f(-1.01f, 1.99f)), Eigen::Vector2i(-1, -1));
-  EXPECT_EQ(g.cell_center(0, 0), Eigen::Vector2f(-0.875f, 2.125f));
-  EXPECT_EQ(g.index(3, 2), 23u);  // row-major, row 0 at the lowest y
-  EXPECT_TRUE(g.in_bounds(9, 9));
-  EXPECT_FALSE(g.in_bounds(10, 0));
-  EXPECT_FALSE(g.in_bounds(0, -1));
-  EXPECT_EQ(g.known_cells(), 0u);
-  EXPECT_TRUE(std::isnan(g.at(4, 4)));
-}
-
 TEST(Grid, BadInputThrows) {
   OccupancyGrid g(0.1f, Eigen::Vector2f(0, 0), 10, 10);
   GridUpdateWorkspace ws;
@@ -617,87 +469,6 @@ TEST(Grid, IdenticalWithOneAndTwoThreads) {
   const std::vector<float> la(a.logodds().begin(), a.logodds().end()), lb(b.logodds().begin(), b.logodds().end());
   EXPECT_TRUE(test::bitwise_equal(la, lb));
   EXPECT_GT(a.known_cells(), 10000u);
-}
-
-}  // namespace test_grid
-}  // namespace duet
-
-namespace duet {
-namespace test_grid {
-
-// accumulate_grid: a reference by forward reasoning on a small grid - each observed src cell
-// moved by T lands in the dst cell its centre maps to (exact for multiples of 90 deg and whole-
-// cell shifts), log-odds summed and clamped; unknown stays unknown.
-TEST(AccumulateGrid, WholeCellShiftsAndQuarterTurnsMatchTheReference) {
-  const float res = 0.1f;
-  OccupancyGrid src(res, {0.0f, 0.0f}, 7, 5);
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<float> u(-2.0f, 3.5f);
-  for (float& l : src.logodds()) l = (rng() % 3 == 0) ? OccupancyGrid::kUnknown : u(rng);
-  for (const Pose2 T : {Pose2{0.0f, 0.0f, 0.0f}, Pose2{0.3f, -0.5f, 0.0f}, Pose2{1.0f, 2.0f, std::numbers::pi_v<float> / 2},
-                        Pose2{-0.4f, 0.2f, std::numbers::pi_v<float>}}) {
-    OccupancyGrid dst(res);
-    accumulate_grid(dst, src, T, -2.0f, 3.5f);
-    accumulate_grid(dst, src, T, -2.0f, 3.5f);  // twice: sums clamp
-    const float c = std::cos(T.theta), s = std::sin(T.theta);
-    std::size_t seen = 0;
-    for (int y = 0; y < src.height(); ++y)
-      for (int x = 0; x < src.width(); ++x) {
-        const Eigen::Vector2f p = src.cell_center(x, y);
-        const Eigen::Vector2f q(T.x + c * p.x() - s * p.y(), T.y + s * p.x() + c * p.y());
-        const Eigen::Vector2i d = dst.cell_of(q);
-        ASSERT_TRUE(dst.in_bounds(d.x(), d.y()));
-        const float l = src.at(x, y);
-        if (std::isnan(l)) {
-          EXPECT_TRUE(std::isnan(dst.at(d.x(), d.y())));
-        } else {
-          EXPECT_NEAR(dst.at(d.x(), d.y()), std::clamp(2.0f * l, -2.0f, 3.5f), 1e-6f);
-          ++seen;
-        }
-      }
-    EXPECT_EQ(dst.known_cells(), seen);
-    // Alignment: the origin stays on whole cells.
-    EXPECT_NEAR(std::remainder(dst.origin().x(), res), 0.0f, 1e-5f);
-  }
-}
-
-TEST(AccumulateGrid, AddsToWhatIsThereAndAnEmptySourceDoesNothing) {
-  OccupancyGrid dst(0.05f, {-1.0f, -1.0f}, 40, 40);
-  dst.logodds()[dst.index(20, 20)] = 1.0f;
-  OccupancyGrid src(0.05f, {-1.0f, -1.0f}, 40, 40);
-  src.logodds()[src.index(20, 20)] = 0.85f;
-  src.logodds()[src.index(21, 20)] = -0.4f;
-  Eigen::Vector2f lo(7.0f, 7.0f), hi(7.0f, 7.0f);
-  EXPECT_FALSE(observed_extent(OccupancyGrid(0.05f), lo, hi));
-  EXPECT_FALSE(observed_extent(OccupancyGrid(0.05f, {0.0f, 0.0f}, 3, 3), lo, hi));
-  EXPECT_EQ(lo.x(), 7.0f);
-  ASSERT_TRUE(observed_extent(src, lo, hi));
-  EXPECT_NEAR(lo.x(), 0.0f, 1e-5f);   // cell 20 starts at -1 + 20 * 0.05
-  EXPECT_NEAR(lo.y(), 0.0f, 1e-5f);
-  EXPECT_NEAR(hi.x(), 0.1f, 1e-5f);   // cell 21 ends at 0.1
-  EXPECT_NEAR(hi.y(), 0.05f, 1e-5f);
-  accumulate_grid(dst, src, Pose2{}, -2.0f, 3.5f);
-  EXPECT_NEAR(dst.at(20, 20), 1.85f, 1e-6f);
-  EXPECT_NEAR(dst.at(21, 20), -0.4f, 1e-6f);
-  EXPECT_EQ(dst.known_cells(), 2u);
-  const OccupancyGrid before = dst;
-  accumulate_grid(dst, OccupancyGrid(0.05f), Pose2{1, 2, 3}, -2.0f, 3.5f);
-  accumulate_grid(dst, OccupancyGrid(0.05f, {0.0f, 0.0f}, 10, 10), Pose2{}, -2.0f, 3.5f);  // all unknown
-  EXPECT_EQ(dst.width(), before.width());
-  EXPECT_EQ(dst.known_cells(), 2u);
-}
-
-TEST(AccumulateGrid, BadInputThrowsAndLeavesTheGrid) {
-  OccupancyGrid dst(0.05f, {0.0f, 0.0f}, 4, 4);
-  OccupancyGrid src(0.1f, {0.0f, 0.0f}, 4, 4);
-  src.logodds()[0] = 1.0f;
-  EXPECT_THROW(accumulate_grid(dst, src, Pose2{}, -2.0f, 3.5f), Error);
-  OccupancyGrid src2(0.05f, {0.0f, 0.0f}, 4, 4);
-  src2.logodds()[0] = 1.0f;
-  EXPECT_THROW(accumulate_grid(dst, src2, Pose2{kNaN, 0.0f, 0.0f}, -2.0f, 3.5f), Error);
-  EXPECT_THROW(accumulate_grid(dst, src2, Pose2{}, 1.0f, -1.0f), Error);
-  EXPECT_EQ(dst.known_cells(), 0u);
-  EXPECT_EQ(dst.width(), 4);
 }
 
 }  // namespace test_grid
