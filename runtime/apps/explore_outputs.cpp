@@ -66,7 +66,8 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                 {"patrol_reached", e.patrol_reached},
                 {"patrol_skipped", e.patrol_skipped},
                 {"patrol_laps", e.patrol_laps},
-                {"recent_obstacle_cells", e.recent_obstacle_cells}};
+                {"recent_obstacle_cells", e.recent_obstacle_cells},
+                {"footprint_clearings", e.footprint_clearings}};
   j["frames_rendered"] = s.frames_rendered;
   j["sets_integrated"] = s.sets_integrated;
   j["sets_not_integrated"] = s.sets_not_integrated;
@@ -116,6 +117,7 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                        {"matches", s.loops.matches},
                        {"rejected_edge", s.loops.rejected_edge},
                        {"rejected_free_space", s.loops.rejected_free_space},
+                       {"rejected_unexplained", s.loops.rejected_unexplained},
                        {"confirmed", s.loops.confirmed},
                        {"closures", s.loops.closures},
                        {"rejected_inconsistent", s.loops.rejected_inconsistent},
@@ -199,7 +201,8 @@ nlohmann::json run_log(const sim::SimExplore& run) {
                                     {"open_node", e.open_node},
                                     {"shift", {e.shift.x, e.shift.y, e.shift.theta}},
                                     {"robot_shift_m", e.robot_shift_m},
-                                    {"score", e.score}});
+                                    {"score", e.score},
+                                    {"prior_score", e.prior_score}});
   j["collisions"] = nlohmann::json::array();
   for (const auto& c : run.collision_log())
     j["collisions"].push_back({{"t_s", c.t_s},

@@ -4,6 +4,7 @@
 #include <duet/kernels/inflation.hpp>
 #include <duet/runtime/navigation/contact_layer.hpp>
 #include <duet/runtime/navigation/costmap_layer.hpp>
+#include <duet/runtime/navigation/footprint_layer.hpp>
 #include <duet/runtime/navigation/navigator.hpp>
 #include <duet/runtime/navigation/recent_obstacle_layer.hpp>
 #include <duet/runtime/navigation/trail_layer.hpp>
@@ -246,4 +247,95 @@ TEST(Navigator, CallersLayerIsPlannedAroundAndShifted) {
   EXPECT_EQ(local.traversable[local.index(c.x(), c.y())], 0);
   nav.shift(duet::Pose2{0.1f, 0.0f, 0.0f});
   EXPECT_EQ(k->shifted, 1);
+}
+
+TEST(FootprintLayer, ClearsOnlyOccupiedCellsWhollyUnderTheBody) {
+  duet::OccupancyGrid g(0.05f, Eigen::Vector2f(0.0f, 0.0f), 60, 60);
+  for (int y = 0; y < 60; ++y)
+    for (int x = 0; x < 60; ++x) g.logodds()[g.index(x, y)] = ((x + y) % 3 == 0) ? 3.0f : ((x + y) % 3 == 1 ? -2.0f : kNaN);
+  const duet::OccupancyGrid before = g;
+  duet::FootprintLayer l(/*body*/ 0.2f, /*occupied*/ 0.85f, /*free*/ -2.5f);
+  EXPECT_FALSE(l.active());
+  l.apply(g);  // inactive: nothing changes
+  EXPECT_EQ(l.cells_cleared(), 0u);
+  const Eigen::Vector2f centre(1.5f, 1.5f);
+  const float r = 0.2f - 0.7072f * 0.05f;
+  std::size_t want = 0;
+  for (int y = 0; y < 60; ++y)
+    for (int x = 0; x < 60; ++x) want += (g.cell_center(x, y) - centre).norm() <= r && before.logodds()[before.index(x, y)] >= 0.85f;
+  ASSERT_GT(want, 5u);
+  EXPECT_EQ(l.occupied_under(g, centre), want);
+  l.set(centre);
+  EXPECT_TRUE(l.active());
+  l.apply(g);
+  EXPECT_EQ(l.cells_cleared(), want);
+  for (int y = 0; y < 60; ++y)
+    for (int x = 0; x < 60; ++x) {
+      const float b = before.logodds()[before.index(x, y)], a = g.logodds()[g.index(x, y)];
+      const bool under = (g.cell_center(x, y) - centre).norm() <= r;
+      if (under && b >= 0.85f) EXPECT_EQ(a, -2.5f) << x << "," << y;
+      else if (std::isnan(b)) EXPECT_TRUE(std::isnan(a)) << x << "," << y;  // unknown stays unknown
+      else EXPECT_EQ(a, b) << x << "," << y;                                 // free, and occupied off the body
+    }
+  // The footprint moves with the map frame; reset() makes the layer inactive.
+  l.shift(duet::Pose2{0.5f, 0.0f, 0.0f});
+  duet::OccupancyGrid g2 = before;
+  l.apply(g2);
+  EXPECT_EQ(l.cells_cleared(), l.occupied_under(before, Eigen::Vector2f(2.0f, 1.5f)));
+  EXPECT_EQ(at(g2, 2.0f, 1.5f) >= 0.85f, false);
+  l.reset();
+  EXPECT_FALSE(l.active());
+  // A body off the grid, a non-finite position, an empty grid: nothing.
+  EXPECT_EQ(l.occupied_under(before, Eigen::Vector2f(-5.0f, -5.0f)), 0u);
+  EXPECT_EQ(l.occupied_under(before, Eigen::Vector2f(kNaN, 1.0f)), 0u);
+  EXPECT_EQ(l.occupied_under(duet::OccupancyGrid(0.05f), centre), 0u);
+  l.set(Eigen::Vector2f(kNaN, 1.0f));
+  EXPECT_FALSE(l.active());
+  // Bad settings are named.
+  EXPECT_THROW(duet::FootprintLayer(0.0f, 0.85f, -2.5f), duet::Error);
+  EXPECT_THROW(duet::FootprintLayer(0.2f, -3.0f, -2.5f), duet::Error);
+  EXPECT_THROW(duet::FootprintLayer(kNaN, 0.85f, -2.5f), duet::Error);
+}
+
+TEST(Navigator, AnObstacleUnderTheEstimatedBodyDoesNotPinTheRobot) {
+  // A post 0.09 m from the estimated centre (a pose a few cm off, a post kept near the sensor):
+  // without the footprint cleared every rollout of the dynamic window starts in the obstacle and
+  // the robot stays where it is; with it the window finds a way, and the post is an obstacle of
+  // the costmaps again once the robot has left it (the map keeps it throughout).
+  duet::OccupancyGrid map = half_known_room();
+  const duet::Pose2 robot{1.0f, 1.5f, 0.0f};
+  const Eigen::Vector2i post = map.cell_of(Eigen::Vector2f(1.09f, 1.5f));
+  map.logodds()[map.index(post.x(), post.y())] = 3.5f;
+  const duet::Profile p = duet_test::frontier_only_profile();
+  for (const bool clear : {false, true}) {
+    SCOPED_TRACE(clear ? "clear_footprint" : "no clear_footprint");
+    duet::ExplorerSettings es = p.runtime.explorer;
+    es.clear_footprint = clear;
+    duet::Navigator nav(p, es);
+    nav.update_map(map, robot, 0.0);
+    nav.decide(robot, 0.0);
+    ASSERT_TRUE(nav.goal().has_value());
+    ASSERT_FALSE(nav.path().empty());
+    const duet::NavPlanView v = nav.view();
+    duet::DwaState st;
+    duet::DwaWorkspace ws;
+    const duet::DwaResult local = duet::dwa_step(v.local->clearance(), robot, duet::Twist{}, v.path, v.dwa, st, ws);
+    st = {};
+    const duet::DwaResult planning = duet::dwa_step(v.planning->clearance(), robot, duet::Twist{}, v.path, v.dwa, st, ws);
+    if (!clear) {
+      EXPECT_EQ(local.status, duet::DwaStatus::kNoValidTrajectory) << "the post does not pin the robot: the scene tests nothing";
+      EXPECT_EQ(planning.status, duet::DwaStatus::kNoValidTrajectory);
+      EXPECT_EQ(nav.stats().footprint_clearings, 0);
+      continue;
+    }
+    EXPECT_TRUE(local.status == duet::DwaStatus::kOk || local.status == duet::DwaStatus::kRotateInPlace) << duet::to_string(local.status);
+    EXPECT_GT(std::fabs(local.cmd.v) + std::fabs(local.cmd.omega), 0.0f);
+    EXPECT_EQ(nav.stats().footprint_clearings, 1);
+    EXPECT_EQ(map.logodds()[map.index(post.x(), post.y())], 3.5f);  // the map keeps the post
+    // 1 m on: the post is an obstacle of the costmaps again.
+    nav.update_map(map, duet::Pose2{2.0f, 1.5f, 0.0f}, 1.0);
+    const duet::InflatedGrid& later = nav.planning_grid();
+    EXPECT_EQ(later.traversable[later.index(post.x(), post.y())], 0);
+    EXPECT_EQ(nav.stats().footprint_clearings, 1);
+  }
 }

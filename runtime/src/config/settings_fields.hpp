@@ -104,6 +104,7 @@ void fields(V& v, LoopClosureSettings& s) {
   v("verify_free_m", s.verify_free_m);
   v("min_hits", s.min_hits);
   v("max_conflict_ratio", s.max_conflict_ratio);
+  v("min_prediction_conflict", s.min_prediction_conflict);
   v("confirm_m", s.confirm_m);
   v("confirm_deg", s.confirm_deg);
   v("min_correction_m", s.min_correction_m);
@@ -142,6 +143,7 @@ void goal_fields(V& v, ExplorerSettings& s) {
   v("view_relook_dwell_s", s.view_relook_dwell_s);
   v("look_with_any_sensor", s.look_with_any_sensor);
   v("frontier_seen_radius_m", s.frontier_seen_radius_m);
+  v("clear_footprint", s.clear_footprint);
   v("recent_obstacles_s", s.recent_obstacles_s);
   v("recent_obstacle_range_m", s.recent_obstacle_range_m);
   v("recent_obstacle_min_scans", s.recent_obstacle_min_scans);

@@ -50,6 +50,8 @@ void validate(const LoopClosureSettings& s) {
   nonneg(s.verify_hit_m, "verify_hit_m");
   if (!(std::isfinite(s.verify_free_m) && s.verify_free_m >= s.verify_hit_m))
     bad("verify_free_m must be >= verify_hit_m, got " + std::to_string(s.verify_free_m));
+  if (!(std::isfinite(s.min_prediction_conflict) && s.min_prediction_conflict >= 0.0f && s.min_prediction_conflict <= 1.0f))
+    bad("min_prediction_conflict must be in [0, 1], got " + std::to_string(s.min_prediction_conflict));
   if (!(std::isfinite(s.max_conflict_ratio) && s.max_conflict_ratio >= 0.0f))
     bad("max_conflict_ratio must be >= 0, got " + std::to_string(s.max_conflict_ratio));
   validate(s.graph);
@@ -212,9 +214,34 @@ bool LoopCloser::check(Mapper& mapper, const Pose2& at, double t, Pose2& match, 
     ++stats_.rejected_free_space;
     return false;
   }
+  // The prediction must be contradicted by the old map for a correction to be believed: query
+  // points that, at the predicted pose, lie on old free floor farther from any old wall than
+  // half the correction (a drift of d puts a wall's points about d off it). A prediction whose
+  // points fall on old walls or on cells the old map never saw is not wrong; a lattice pose
+  // that lays the new walls on old ones elsewhere then is an alias (a shelf's or a door's
+  // repeat), not a loop.
+  {
+    const float d = std::hypot(off.x, off.y);
+    const float near_m = std::max(settings_.verify_hit_m, 0.5f * d);
+    std::size_t contradicted = 0;
+    for (const Eigen::Vector2f& q : query_) {
+      const Eigen::Vector2f p = transform_point(at, q);
+      Eigen::Vector2i cell;
+      if (!distance_.cell_of(p, cell)) continue;
+      const std::size_t i = distance_.index(cell.x(), cell.y());
+      if (distance_.state[i] == CellState::kFree && distance_.clearance_m[i] > near_m) ++contradicted;
+    }
+    last_prior_conflict_ = query_.empty() ? 0.0f : static_cast<float>(contradicted) / static_cast<float>(query_.size());
+  }
+  const bool moves_map = std::hypot(off.x, off.y) > settings_.min_correction_m || std::fabs(off.theta) > settings_.min_correction_deg * kDeg;
+  if (moves_map && settings_.min_prediction_conflict > 0.0f && last_prior_conflict_ < settings_.min_prediction_conflict) {
+    ++stats_.rejected_unexplained;
+    return false;
+  }
   ++stats_.matches;
   match = res_match.pose;
   last_score_ = res_match.score;
+  last_prior_score_ = res_match.prior_score;
   // The old submap holding most matched points (occupied there, at its placement).
   std::size_t best = used.front(), best_count = 0;
   for (const std::size_t k : used) {
@@ -277,7 +304,7 @@ std::optional<Pose2> LoopCloser::close(Mapper& mapper, const Pose2& at, double t
   ++stats_.closures;
   const float moved = std::hypot(last_at_->x - at.x, last_at_->y - at.y);
   stats_.max_shift_m = std::max(stats_.max_shift_m, moved);
-  events_.push_back({t, old_node, c, shift, moved, last_score_});
+  events_.push_back({t, old_node, c, shift, moved, last_score_, last_prior_score_});
   return shift;
 }
 

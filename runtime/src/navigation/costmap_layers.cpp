@@ -1,7 +1,10 @@
 /// @file costmap_layers.cpp
-/// The Navigator's costmap layers (contact_layer.hpp, recent_obstacle_layer.hpp, trail_layer.hpp).
+/// The Navigator's costmap layers (contact_layer.hpp, footprint_layer.hpp, recent_obstacle_layer.hpp,
+/// trail_layer.hpp).
 #include <duet/kernels/motion_model.hpp>
+#include <duet/kernels/error.hpp>
 #include <duet/runtime/navigation/contact_layer.hpp>
+#include <duet/runtime/navigation/footprint_layer.hpp>
 #include <duet/runtime/navigation/recent_obstacle_layer.hpp>
 #include <duet/runtime/navigation/trail_layer.hpp>
 
@@ -115,6 +118,51 @@ void TrailLayer::apply(OccupancyGrid& grid) {
 void TrailLayer::shift(const Pose2& D) {
   shift_points(points_, D);
   geometry_ = {};  // the cells are computed again
+}
+
+// ---- FootprintLayer -------------------------------------------------------------------------
+
+FootprintLayer::FootprintLayer(float body_radius_m, float occupied_logodds, float free_logodds)
+    : body_radius_m_(body_radius_m), occupied_(occupied_logodds), free_(free_logodds) {
+  if (!(std::isfinite(body_radius_m) && body_radius_m > 0.0f))
+    fail(ErrorCode::kInvalidArgument, "FootprintLayer: body_radius_m must be > 0, got " + std::to_string(body_radius_m));
+  if (!std::isfinite(occupied_logodds) || !std::isfinite(free_logodds) || !(free_logodds < occupied_logodds))
+    fail(ErrorCode::kInvalidArgument, "FootprintLayer: free_logodds must be below occupied_logodds, both finite");
+}
+
+template <class F>
+void FootprintLayer::for_each_under(const OccupancyGrid& grid, const Eigen::Vector2f& xy, F&& fn) const {
+  if (!xy.allFinite() || grid.width() <= 0 || grid.height() <= 0) return;
+  const float r = body_radius_m_ - 0.7072f * grid.resolution();  // wholly under: less half a cell's diagonal
+  if (!(r > 0.0f)) return;
+  for_each_index_in_disc(grid, xy, r, fn);
+}
+
+std::size_t FootprintLayer::occupied_under(const OccupancyGrid& grid, const Eigen::Vector2f& xy) const {
+  std::size_t n = 0;
+  const float* l = grid.logodds().data();
+  for_each_under(grid, xy, [&](std::size_t i) { n += l[i] >= occupied_; });
+  return n;
+}
+
+void FootprintLayer::set(const Eigen::Vector2f& xy) {
+  if (xy.allFinite()) at_ = xy;
+}
+
+void FootprintLayer::apply(OccupancyGrid& grid) {
+  cleared_ = 0;
+  if (!at_) return;
+  float* l = grid.logodds().data();
+  for_each_under(grid, *at_, [&](std::size_t i) {
+    if (l[i] >= occupied_) {
+      l[i] = free_;
+      ++cleared_;
+    }
+  });
+}
+
+void FootprintLayer::shift(const Pose2& D) {
+  if (at_) at_ = transform_point(D, *at_);
 }
 
 }  // namespace duet

@@ -49,9 +49,12 @@ Navigator::Navigator(const Profile& profile, const ExplorerSettings& settings, s
   auto recent = std::make_unique<RecentObstacleLayer>(profile_.exploration.cells.occupied_logodds, occupied);
   auto trail = std::make_unique<TrailLayer>(profile_.chassis.radius_m,
                                             profile_.exploration.dwa.robot_radius_m + profile_.exploration.dwa.safety_margin_m, free);
+  auto footprint = std::make_unique<FootprintLayer>(profile_.chassis.radius_m, profile_.exploration.cells.occupied_logodds, free);
   contacts_ = contacts.get();
   recent_ = recent.get();
   trail_ = trail.get();
+  footprint_ = footprint.get();
+  planning_costmap_.add(std::move(footprint));  // first: a contact the robot felt stays one
   planning_costmap_.add(std::move(contacts));
   local_costmap_.add(std::move(recent));
   local_costmap_.add(std::move(trail));
@@ -164,6 +167,14 @@ void Navigator::update_map(const OccupancyGrid& grid, const Pose2& robot, double
   } else {
     model_.set_grid(view);
     model_geometry_valid_ = true;
+  }
+  // The robot stands where it is: map obstacles under its estimated body are not obstacles for
+  // the planner and the dynamic window (the layer is active only when there are some).
+  const Eigen::Vector2f here(robot.x, robot.y);
+  footprint_->reset();
+  if (settings_.clear_footprint && footprint_->occupied_under(grid, here) > 0) {
+    footprint_->set(here);
+    ++stats_.footprint_clearings;
   }
   // Planning and driving see the contact obstacles too (the observation model keeps the map).
   const OccupancyGrid& planning_map = planning_costmap_.update(grid);

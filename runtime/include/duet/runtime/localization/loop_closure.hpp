@@ -50,6 +50,7 @@ struct LoopClosureStats {
   std::size_t matches = 0;             ///< ... whose match reached min_score and passed the checks below
   std::size_t rejected_edge = 0;       ///< matches whose best lay on the window's edge (not a peak)
   std::size_t rejected_free_space = 0; ///< matches that put query points on the old map's free floor
+  std::size_t rejected_unexplained = 0; ///< ... that would move the map while the old map does not contradict the prediction
   std::size_t confirmed = 0;           ///< ... confirmed by the next search (loop edges added)
   std::size_t closures = 0;            ///< optimisations that moved the map
   std::size_t rejected_inconsistent = 0;  ///< loop edges dropped after optimisation (chi2 > max_loop_chi2)
@@ -69,6 +70,7 @@ struct LoopClosureEvent {
   Pose2 shift;                 ///< the map frame's shift (new = shift * old)
   float robot_shift_m = 0.0f;  ///< how far it moved the robot's pose [m]
   float score = 0.0f;          ///< the match's score
+  float prior_score = 0.0f;    ///< the score of the predicted pose against the same old map
 };
 
 class LoopCloser {
@@ -135,6 +137,8 @@ class LoopCloser {
   };
   std::vector<Extent> extents_;     ///< of the closed submaps, by index
   float last_score_ = 0.0f;
+  float last_prior_score_ = 0.0f;
+  float last_prior_conflict_ = 0.0f;
   bool frozen_ = false;
 };
 

@@ -30,6 +30,14 @@ struct LoopClosureSettings {
   float verify_free_m = 0.25f;       ///< ... one on old free floor farther than this from any wall a conflict [m], >= verify_hit_m
   std::size_t min_hits = 100;        ///< a match needs at least this many hits ...
   float max_conflict_ratio = 0.05f;  ///< ... and at most this many conflicts per hit, >= 0
+  /// A match that would move the map (beyond min_correction_m / min_correction_deg) is believed
+  /// only when the old map contradicts the prediction: at least this share of the query's points,
+  /// at the predicted pose, on old free floor farther than max(verify_hit_m, half the correction)
+  /// from any old wall, [0, 1]; 0 = no such check. A drift of d puts a wall's points about d
+  /// off it; a right prediction puts them on old walls or on cells the old map never saw, and a
+  /// wide window then finds an alias that lays the new walls on old ones (the lab's shelves:
+  /// 0.9 m along an aisle with the pose 0.05 m from the truth, issue 23).
+  float min_prediction_conflict = 0.03f;
   float confirm_m = 0.15f;           ///< two consecutive matches confirm a loop when their offsets agree within this [m]
   float confirm_deg = 1.5f;          ///< ... and this [deg]
   float min_correction_m = 0.10f;    ///< optimise when a confirmed loop is off the graph by more than this [m]

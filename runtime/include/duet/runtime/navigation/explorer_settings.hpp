@@ -90,6 +90,11 @@ struct ExplorerSettings {
   /// reached 90 % in 896 s instead of 1080 s, but the paper's strategy (few frontier goals) gained
   /// nothing there (bench/RESULTS.md).
   float frontier_seen_radius_m = 0.0f;
+  /// The cells wholly under the robot's body at its estimated pose are not obstacles in the
+  /// costmaps (footprint_layer.hpp; the map keeps them): a pose a few centimetres off must not
+  /// pin the robot to an obstacle its map puts under it (belgioioso seed 2 with near obstacles
+  /// kept: 2700 s beside a post, issue 23).
+  bool clear_footprint = true;
   /// Recent obstacles (a local costmap's obstacle layer): cells an obstacle point of the last
   /// recent_obstacles_s seconds fell in block the dynamic window's grid, whatever the map's
   /// log-odds say (where the pose moved since a place was mapped, the map needs several hits to
@@ -172,6 +177,8 @@ struct ExplorerStats {
   int patrol_laps = 0;              ///< patrol rounds completed
   /// Sum over map updates of the cells the recent obstacles made blocking.
   std::size_t recent_obstacle_cells = 0;
+  /// Map updates at which an occupied cell lay under the estimated body (clear_footprint).
+  int footprint_clearings = 0;
   double decision_time_sum_s = 0.0;
   double decision_time_max_s = 0.0;
 };

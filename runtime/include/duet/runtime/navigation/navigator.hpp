@@ -41,6 +41,7 @@
 #include <duet/runtime/navigation/contact_layer.hpp>
 #include <duet/runtime/navigation/costmap_layer.hpp>
 #include <duet/runtime/navigation/explorer_settings.hpp>
+#include <duet/runtime/navigation/footprint_layer.hpp>
 #include <duet/runtime/navigation/goal_strategy.hpp>
 #include <duet/runtime/navigation/recent_obstacle_layer.hpp>
 #include <duet/runtime/navigation/trail_layer.hpp>
@@ -204,6 +205,7 @@ class Navigator {
   LayeredCostmap planning_costmap_;
   LayeredCostmap local_costmap_;
   ContactLayer* contacts_ = nullptr;       ///< the default layers (owned by the costmaps)
+  FootprintLayer* footprint_ = nullptr;
   RecentObstacleLayer* recent_ = nullptr;
   TrailLayer* trail_ = nullptr;
   GoalBlacklist blacklist_;
