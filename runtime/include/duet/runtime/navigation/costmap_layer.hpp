@@ -3,7 +3,8 @@
 /// Costmap layers, as nav2's costmap_2d composes them: each layer marks or clears cells of a
 /// working copy of the map, in order, and the result is inflated (inflation.hpp) for planning
 /// and for the dynamic window. The Navigator (navigator.hpp) keeps two LayeredCostmaps:
-///  - the planning costmap: the map + the contact obstacles (contact_layer.hpp), inflated;
+///  - the planning costmap: the map, with no obstacle under the robot's estimated body
+///    (footprint_layer.hpp), + the contact obstacles (contact_layer.hpp), inflated;
 ///  - the local costmap (the dynamic window's): the planning costmap's grid + the recent
 ///    obstacles (recent_obstacle_layer.hpp) + the body's trail (trail_layer.hpp), inflated with
 ///    unknown cells as obstacles.
