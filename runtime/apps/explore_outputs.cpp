@@ -203,6 +203,16 @@ nlohmann::json run_log(const sim::SimExplore& run) {
                                     {"robot_shift_m", e.robot_shift_m},
                                     {"score", e.score},
                                     {"prior_score", e.prior_score}});
+  j["loop_matches"] = nlohmann::json::array();
+  if (const LoopCloser* lc = run.runtime().loop_closer())
+    for (const auto& m : lc->matches())
+      j["loop_matches"].push_back({{"t_s", m.t_s},
+                                   {"correction", {m.correction.x, m.correction.y, m.correction.theta}},
+                                   {"score", m.score},
+                                   {"prior_score", m.prior_score},
+                                   {"prediction_conflict", m.prediction_conflict},
+                                   {"moves_map", m.moves_map},
+                                   {"accepted", m.accepted}});
   j["collisions"] = nlohmann::json::array();
   for (const auto& c : run.collision_log())
     j["collisions"].push_back({{"t_s", c.t_s},

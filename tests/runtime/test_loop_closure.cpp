@@ -175,6 +175,19 @@ TEST(LoopClosure, AnAliasDoesNotMoveAPoseTheOldMapDoesNotContradict) {
     EXPECT_LT(s.loops.max_shift_m, 0.25f);
     EXPECT_GE(s.loops.rejected_unexplained, 1u);
     EXPECT_EQ(s.collisions, 0u);
+    // Each match's record says what the check saw: the turned-down ones would have moved the map
+    // on a share below the threshold, the others did not need it or had it.
+    const LoopCloser* lc = run.runtime().loop_closer();
+    ASSERT_NE(lc, nullptr);
+    const float gate = es.runtime.loop_closure.min_prediction_conflict;
+    std::size_t turned_down = 0;
+    for (const LoopMatchRecord& m : lc->matches()) {
+      EXPECT_GE(m.prediction_conflict, 0.0f);
+      EXPECT_LE(m.prediction_conflict, 1.0f);
+      EXPECT_EQ(m.accepted, !(m.moves_map && m.prediction_conflict < gate)) << "at " << m.t_s << " s";
+      turned_down += !m.accepted;
+    }
+    EXPECT_EQ(turned_down, s.loops.rejected_unexplained);
   }
 }
 

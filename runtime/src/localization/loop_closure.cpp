@@ -234,7 +234,10 @@ bool LoopCloser::check(Mapper& mapper, const Pose2& at, double t, Pose2& match, 
     last_prior_conflict_ = query_.empty() ? 0.0f : static_cast<float>(contradicted) / static_cast<float>(query_.size());
   }
   const bool moves_map = std::hypot(off.x, off.y) > settings_.min_correction_m || std::fabs(off.theta) > settings_.min_correction_deg * kDeg;
-  if (moves_map && settings_.min_prediction_conflict > 0.0f && last_prior_conflict_ < settings_.min_prediction_conflict) {
+  const bool unexplained =
+      moves_map && settings_.min_prediction_conflict > 0.0f && last_prior_conflict_ < settings_.min_prediction_conflict;
+  matches_.push_back({t, off, res_match.score, res_match.prior_score, last_prior_conflict_, moves_map, !unexplained});
+  if (unexplained) {
     ++stats_.rejected_unexplained;
     return false;
   }

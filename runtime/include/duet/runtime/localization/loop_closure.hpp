@@ -73,6 +73,18 @@ struct LoopClosureEvent {
   float prior_score = 0.0f;    ///< the score of the predicted pose against the same old map
 };
 
+/// One match that passed the window-edge and free-space checks (LoopCloser::matches()): what the
+/// prediction check (LoopClosureSettings::min_prediction_conflict) saw, for diagnosis.
+struct LoopMatchRecord {
+  double t_s = 0.0;                ///< stamp of the search [s]
+  Pose2 correction;                ///< the match relative to the prediction (robot frame)
+  float score = 0.0f;              ///< the match's score
+  float prior_score = 0.0f;        ///< the prediction's score against the same old map
+  float prediction_conflict = 0.0f;  ///< the share of the query on old free floor at the prediction, [0, 1]
+  bool moves_map = false;          ///< beyond min_correction_m / min_correction_deg
+  bool accepted = false;           ///< passed the prediction check (a candidate for confirmation)
+};
+
 class LoopCloser {
  public:
   /// Puts `mapper` into submap mode (Mapper::keep_submaps(): call before its first integrate()).
@@ -100,6 +112,8 @@ class LoopCloser {
   [[nodiscard]] const std::vector<PoseGraphEdge>& edges() const noexcept { return edges_; }
   /// Every closure that moved the map, in order.
   [[nodiscard]] const std::vector<LoopClosureEvent>& events() const noexcept { return events_; }
+  /// Every match that reached the prediction check, in order (one per loop search at most).
+  [[nodiscard]] const std::vector<LoopMatchRecord>& matches() const noexcept { return matches_; }
 
  private:
   bool check(Mapper& mapper, const Pose2& at, double t, Pose2& match, std::size_t& old_node);
@@ -131,6 +145,7 @@ class LoopCloser {
   std::vector<std::pair<std::uint64_t, Eigen::Vector2f>> cells_scratch_;  ///< (cell, point) scratch
   LoopClosureStats stats_;
   std::vector<LoopClosureEvent> events_;
+  std::vector<LoopMatchRecord> matches_;
   struct Extent {
     bool observed = false;
     Eigen::Vector2f lo{0.0f, 0.0f}, hi{0.0f, 0.0f};  ///< observed cells' bounds, integration frame [m]
