@@ -25,18 +25,7 @@ using test::kNaN;
 
 constexpr float kFree = -2.0f, kOcc = 3.0f, kMid = 0.1f;
 
-struct TestGrid {
-  std::vector<float> l;
-  int w = 0, h = 0;
-  float res = 0.05f;
-  Eigen::Vector2f origin{0.0f, 0.0f};
-  [[nodiscard]] GridView view() const { return GridView(l, w, h, res, origin); }
-  void set(int x, int y, float v) { l[static_cast<std::size_t>(y * w + x)] = v; }
-  void rect(int x0, int y0, int x1, int y1, float v) {  // inclusive
-    for (int y = std::max(0, y0); y <= std::min(h - 1, y1); ++y)
-      for (int x = std::max(0, x0); x <= std::min(w - 1, x1); ++x) set(x, y, v);
-  }
-};
+using TestGrid = test::LogOddsTestGrid;
 
 inline TestGrid blank(int w, int h, float v, float res = 0.05f) {
   TestGrid g;

@@ -3,6 +3,7 @@
 // bitwise comparison, seeded random clouds, PCL conversion.
 #include <duet/kernels/back_projection.hpp>
 #include <duet/kernels/error.hpp>
+#include <duet/kernels/grid_view.hpp>
 #include <duet/kernels/types.hpp>
 
 #include <gtest/gtest.h>
@@ -10,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -33,6 +35,20 @@
 namespace duet::test {
 
 inline constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+/// A log-odds grid owned by a test (row-major, NaN = never observed), viewed as the kernels read it.
+struct LogOddsTestGrid {
+  std::vector<float> l;
+  int w = 0, h = 0;
+  float res = 0.05f;
+  Eigen::Vector2f origin{0.0f, 0.0f};
+  [[nodiscard]] GridView view() const { return GridView(l, w, h, res, origin); }
+  void set(int x, int y, float v) { l[static_cast<std::size_t>(y * w + x)] = v; }
+  void rect(int x0, int y0, int x1, int y1, float v) {  // inclusive, clipped to the grid
+    for (int y = std::max(0, y0); y <= std::min(h - 1, y1); ++y)
+      for (int x = std::max(0, x0); x <= std::min(w - 1, x1); ++x) set(x, y, v);
+  }
+};
 inline constexpr float kInf = std::numeric_limits<float>::infinity();
 
 // ---- build speed ---------------------------------------------------------------------------------

@@ -26,13 +26,7 @@ using test::kNaN;
 
 constexpr float kFree = -2.0f, kOcc = 3.0f, kMid = 0.1f;  // kMid: observed but between thresholds = unknown
 
-struct TestGrid {
-  std::vector<float> l;
-  int w = 0, h = 0;
-  float res = 0.05f;
-  Eigen::Vector2f origin{0.0f, 0.0f};
-  [[nodiscard]] GridView view() const { return GridView(l, w, h, res, origin); }
-};
+using TestGrid = test::LogOddsTestGrid;
 
 TestGrid random_grid(int w, int h, double p_occ, double p_unk, std::uint32_t seed, float res = 0.05f) {
   TestGrid g;

@@ -27,14 +27,7 @@ using test::kNaN;
 
 constexpr float kFree = -2.0f, kOcc = 3.0f;
 
-struct TestGrid {
-  std::vector<float> l;
-  int w = 0, h = 0;
-  float res = 0.05f;
-  Eigen::Vector2f origin{0.0f, 0.0f};
-  [[nodiscard]] GridView view() const { return GridView(l, w, h, res, origin); }
-  void set(int x, int y, float v) { l[static_cast<std::size_t>(y * w + x)] = v; }
-};
+using TestGrid = test::LogOddsTestGrid;
 
 TestGrid blank(int w, int h, float v = kFree, float res = 0.05f) {
   TestGrid g;
