@@ -140,6 +140,11 @@ void LoopCloser::freeze(double t) {
   ring_.clear();
 }
 
+bool LoopCloser::beyond_min_correction(const Pose2& at, const Pose2& match) const {
+  return std::hypot(match.x - at.x, match.y - at.y) > settings_.min_correction_m ||
+         std::fabs(std::remainder(match.theta - at.theta, 2.0f * std::numbers::pi_v<float>)) > settings_.min_correction_deg * kDeg;
+}
+
 bool LoopCloser::check(Mapper& mapper, const Pose2& at, double t, Pose2& match, std::size_t& old_node) {
   const auto& submaps = mapper.submaps();
   // The old map around the robot.
@@ -233,7 +238,7 @@ bool LoopCloser::check(Mapper& mapper, const Pose2& at, double t, Pose2& match, 
     }
     last_prior_conflict_ = query_.empty() ? 0.0f : static_cast<float>(contradicted) / static_cast<float>(query_.size());
   }
-  const bool moves_map = std::hypot(off.x, off.y) > settings_.min_correction_m || std::fabs(off.theta) > settings_.min_correction_deg * kDeg;
+  const bool moves_map = beyond_min_correction(at, res_match.pose);
   const bool unexplained =
       moves_map && settings_.min_prediction_conflict > 0.0f && last_prior_conflict_ < settings_.min_prediction_conflict;
   matches_.push_back({t, off, res_match.score, res_match.prior_score, last_prior_conflict_, moves_map, !unexplained});
@@ -281,9 +286,7 @@ std::optional<Pose2> LoopCloser::close(Mapper& mapper, const Pose2& at, double t
   e.sigma_theta_rad = settings_.loop_sigma_theta_deg * kDeg;
   e.robust = true;
   edges_.push_back(e);
-  const Pose2 off = compose(match, inverse(at));
-  const bool big = std::hypot(match.x - at.x, match.y - at.y) > settings_.min_correction_m ||
-                   std::fabs(off.theta) > settings_.min_correction_deg * kDeg;
+  const bool big = beyond_min_correction(at, match);
   if (!big) return std::nullopt;
   std::vector<Pose2> x = nodes_;
   PoseGraphSettings gs = settings_.graph;

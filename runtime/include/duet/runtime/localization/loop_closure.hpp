@@ -118,6 +118,9 @@ class LoopCloser {
  private:
   bool check(Mapper& mapper, const Pose2& at, double t, Pose2& match, std::size_t& old_node);
   std::optional<Pose2> close(Mapper& mapper, const Pose2& at, double t, const Pose2& match, std::size_t old_node);
+  /// Whether `match` is off the prediction `at` by more than min_correction_m or min_correction_deg
+  /// (a closure that would move the map).
+  [[nodiscard]] bool beyond_min_correction(const Pose2& at, const Pose2& match) const;
 
   LoopClosureSettings settings_;
   CellThresholds cells_;
