@@ -11,6 +11,7 @@ one line. Used by the ROS tests (tests/ros/) and the README's ROS section.
 import argparse
 import json
 import os
+import random
 import signal
 import socket
 import subprocess
@@ -23,21 +24,48 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 
 
 def free_port():
-    s = socket.socket()
-    s.bind(("127.0.0.1", 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
+    """A free loopback port below the kernel's ephemeral range. A port from bind(0) is ephemeral: once
+    it is closed, the next process to bind port 0 can get it back - roscore's own roslaunch server
+    did, in CI (stop 43): rosmaster could not bind, and the master URI answered "getSystemState is not
+    supported". Ports below the ephemeral range are only ever taken on purpose."""
+    low = 32768
+    try:
+        with open("/proc/sys/net/ipv4/ip_local_port_range") as f:
+            low = int(f.read().split()[0])
+    except (OSError, ValueError, IndexError):
+        pass
+    rng = random.Random(os.getpid() ^ int(time.time() * 1e6))
+    for _ in range(200):
+        port = rng.randrange(max(1024, low - 12000), low)
+        s = socket.socket()
+        try:
+            s.bind(("127.0.0.1", port))
+            return port
+        except OSError:
+            continue
+        finally:
+            s.close()
+    raise RuntimeError("no free loopback port below %d after 200 tries" % low)
 
 
-def wait_master(uri, timeout=30.0):
+class NotOurMaster(RuntimeError):
+    pass
+
+
+def wait_master(uri, core=None, timeout=30.0):
+    """Waits until a ROS master answers at uri. Raises NotOurMaster if roscore exited or something
+    that is not a master answers there (the caller then tries another port)."""
     end = time.time() + timeout
     master = xmlrpc.client.ServerProxy(uri)
     while time.time() < end:
+        if core is not None and core.poll() is not None:
+            raise NotOurMaster("roscore exited (%s) before its master answered at %s" % (core.returncode, uri))
         try:
             code, _, _ = master.getSystemState("/ros_sim_run")
             if code == 1:
                 return master
+        except xmlrpc.client.Fault as e:
+            raise NotOurMaster("%s answers, but it is not a ROS master: %s" % (uri, e.faultString))
         except OSError:
             pass
         time.sleep(0.2)
@@ -85,9 +113,8 @@ def main():
 
     out = os.path.abspath(a.out)
     os.makedirs(out, exist_ok=True)
-    port = free_port()
     env = dict(os.environ)
-    env.update(ROS_MASTER_URI="http://127.0.0.1:%d" % port, ROS_HOSTNAME="127.0.0.1", ROS_IP="127.0.0.1",
+    env.update(ROS_HOSTNAME="127.0.0.1", ROS_IP="127.0.0.1",
                ROS_HOME=os.path.join(out, "ros_home"), ROS_LOG_DIR=os.path.join(out, "ros_log"))
     logs = {}
 
@@ -96,10 +123,23 @@ def main():
         return subprocess.Popen(cmd, env=env, stdout=logs[name], stderr=subprocess.STDOUT, start_new_session=True)
 
     core = bridge = node = bag = None
-    result = {"port": port}
+    result = {"master_attempts": []}
     try:
-        core = start("roscore", ["roscore", "-p", str(port)])
-        master = wait_master(env["ROS_MASTER_URI"])
+        for attempt in range(4):
+            port = free_port()
+            env["ROS_MASTER_URI"] = "http://127.0.0.1:%d" % port
+            core = start("roscore", ["roscore", "-p", str(port)])
+            try:
+                master = wait_master(env["ROS_MASTER_URI"], core)
+                break
+            except NotOurMaster as e:
+                result["master_attempts"].append(str(e))
+                print("ros_sim_run: %s; trying another port" % e, file=sys.stderr)
+                stop(core, signal.SIGINT)
+                core = None
+        else:
+            raise RuntimeError("no ROS master came up in 4 tries: " + "; ".join(result["master_attempts"]))
+        result["port"] = port
         master.setParam("/ros_sim_run", "/use_sim_time", True)
         sets = ["runtime.sensor_rate_hz=%g" % a.sensor_rate] + a.node_set
         if a.record:
