@@ -95,9 +95,13 @@ struct Candidate {
 
 /// Scores the lattice centre + (i dl, j dl, k da) for |i|, |j| <= nl, |k| <= na; the best by W
 /// (ties: lowest (k, j, i) in that order of loops).
+/// With `all`, every candidate's S is stored there at index (k + na) (2 nl + 1)^2 + (j + nl) (2 nl + 1) + (i + nl).
 Candidate search(const Field& f, std::span<const Eigen::Vector2f> pts, std::size_t n_total, const Pose2& prior, const Pose2& centre,
-                 int nl, float dl, int na, float da, const ScanMatchSettings& s, std::size_t& scored) {
+                 int nl, float dl, int na, float da, const ScanMatchSettings& s, std::size_t& scored,
+                 std::vector<float>* all = nullptr) {
   const int n_angles = 2 * na + 1;
+  const std::size_t side = static_cast<std::size_t>(2 * nl + 1);
+  if (all != nullptr) all->assign(static_cast<std::size_t>(n_angles) * side * side, 0.0f);
   std::vector<Candidate> per_angle(static_cast<std::size_t>(n_angles));
   const float inv_n = 1.0f / static_cast<float>(n_total);
   const float kt = -0.5f / (s.prior_sigma_m * s.prior_sigma_m);
@@ -119,6 +123,8 @@ Candidate search(const Field& f, std::span<const Eigen::Vector2f> pts, std::size
           float sum = 0.0f;
           for (const Eigen::Vector2f& q : rotated) sum += f.at(q.x() + x, q.y() + y);
           const float score = sum * inv_n;
+          if (all != nullptr)
+            (*all)[static_cast<std::size_t>(ai) * side * side + static_cast<std::size_t>(j + nl) * side + static_cast<std::size_t>(i + nl)] = score;
           const float dx = x - prior.x, dy = y - prior.y;
           const float w = score * angle_weight * std::exp(kt * (dx * dx + dy * dy));
           if (w > best.weighted) best = Candidate{w, score, Pose2{x, y, theta}};
@@ -158,6 +164,7 @@ void validate(const ScanMatchSettings& s) {
   if (!(std::isfinite(s.prior_sigma_deg) && s.prior_sigma_deg > 0.0f)) bad("prior_sigma_deg", s.prior_sigma_deg, "(0, inf) deg");
   if (s.min_points < 1) bad("min_points", static_cast<double>(s.min_points), "[1, inf)");
   if (!in(s.min_score, 0.0f, 1.0f)) bad("min_score", s.min_score, "[0, 1]");
+  if (!in(s.runner_up_distance_m, 0.0f, 5.0f)) bad("runner_up_distance_m", s.runner_up_distance_m, "[0, 5] m");
   // The lattice must stay a sane size: at most 401 steps per axis.
   if (s.linear_window_m / s.linear_step_m > 200.0f) bad("linear_window_m / linear_step_m", s.linear_window_m / s.linear_step_m, "[0, 200]");
   if (s.angular_window_deg / s.angular_step_deg > 200.0f)
@@ -245,7 +252,19 @@ ScanMatchResult scan_match(ClearanceView distance, std::span<const Eigen::Vector
   const std::size_t n = points_robot.size();
   std::size_t scored = 0;
   Candidate prior_c = search(f, pts, n, prior, prior, 0, dl, 0, da, settings, scored);
-  Candidate best = search(f, pts, n, prior, prior, nl, dl, na, da, settings, scored);
+  std::vector<float> coarse;
+  const bool runner_up = settings.runner_up_distance_m > 0.0f;
+  Candidate best = search(f, pts, n, prior, prior, nl, dl, na, da, settings, scored, runner_up ? &coarse : nullptr);
+  if (runner_up) {
+    // The best S of a coarse candidate farther than runner_up_distance_m from the coarse best.
+    const float r2 = settings.runner_up_distance_m * settings.runner_up_distance_m;
+    const std::size_t side = static_cast<std::size_t>(2 * nl + 1);
+    for (std::size_t k = 0; k < coarse.size(); ++k) {
+      const int i = static_cast<int>(k % side) - nl, j = static_cast<int>((k / side) % side) - nl;
+      const float dx = prior.x + static_cast<float>(i) * dl - best.pose.x, dy = prior.y + static_cast<float>(j) * dl - best.pose.y;
+      if (dx * dx + dy * dy > r2) out.runner_up_score = std::max(out.runner_up_score, coarse[k]);
+    }
+  }
   // Refine: a quarter of the steps, +-3/4 of a coarse step around the best.
   best = search(f, pts, n, prior, best.pose, 3, dl / 4.0f, 3, da / 4.0f, settings, scored);
   // Below the lattice: a quadratic in (x, y, theta) fitted by least squares to W on the 3 x 3 x 3

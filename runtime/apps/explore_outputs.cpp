@@ -83,6 +83,7 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                {"scan_match_rejected", s.scan_match_rejected},
                {"relocalizations_held", s.relocalizations_held},
                {"relocalizations_new_space", s.relocalizations_new_space},
+               {"relocalizations_ambiguous", s.relocalizations_ambiguous},
                {"relocalizations_asked", s.relocalizations_asked},
                {"scan_match_time_s", s.scan_match_time_s}};
   if (s.visual_odometry)
@@ -211,6 +212,7 @@ nlohmann::json run_log(const sim::SimExplore& run) {
                                    {"score", m.score},
                                    {"prior_score", m.prior_score},
                                    {"prediction_conflict", m.prediction_conflict},
+                                   {"shift_m", m.shift_m},
                                    {"moves_map", m.moves_map},
                                    {"accepted", m.accepted}});
   j["collisions"] = nlohmann::json::array();

@@ -279,6 +279,89 @@ TEST(ScanMatch, HugePointsAndFarPriorsAreSafe) {
   EXPECT_EQ(far.pose.x, 9999.0f);
 }
 
+// The runner-up (ScanMatchSettings::runner_up_distance_m): in a room the scan fits one place, so
+// the best other fit scores far below the match; along a corridor it fits everywhere, so the
+// runner-up scores as the match does. Against a reference: every coarse candidate scored by
+// scan_match_score(), the coarse best by the weight, the best score farther than the distance.
+// Asking for it does not change the match.
+TEST(ScanMatch, RunnerUpIsTheBestFitElsewhere) {
+  ScanMatchSettings wide;
+  wide.linear_window_m = 1.0f;
+  wide.linear_step_m = 0.1f;
+  wide.angular_window_deg = 3.0f;
+  wide.angular_step_deg = 1.0f;
+  wide.prior_sigma_m = 100.0f;
+  wide.prior_sigma_deg = 100.0f;
+  ScanMatchSettings with = wide;
+  with.runner_up_distance_m = 0.3f;
+  auto reference = [&](const Map& m, const std::vector<Eigen::Vector2f>& pts, const Pose2& prior) {
+    const int nl = 10, na = 3;
+    Pose2 best;
+    float best_w = -1.0f;
+    std::vector<std::pair<Pose2, float>> all;
+    for (int k = -na; k <= na; ++k)
+      for (int j = -nl; j <= nl; ++j)
+        for (int i = -nl; i <= nl; ++i) {
+          const Pose2 c{prior.x + static_cast<float>(i) * 0.1f, prior.y + static_cast<float>(j) * 0.1f,
+                        prior.theta + static_cast<float>(k) * kDeg};
+          const float sc = scan_match_score(m.field.clearance(), pts, c, wide);
+          all.emplace_back(c, sc);
+          const float w = weight(c, prior, sc, wide);
+          if (w > best_w + 1e-6f) {
+            best_w = w;
+            best = c;
+          }
+        }
+    float runner_up = 0.0f;
+    for (const auto& [c, sc] : all)
+      if (std::hypot(c.x - best.x, c.y - best.y) > 0.3f) runner_up = std::max(runner_up, sc);
+    return runner_up;
+  };
+  {  // the room: one fit
+    const auto walls = room_walls();
+    const Map m = map_of(walls);
+    const Pose2 truth{3.0f, 2.6f, 0.4f};
+    const auto pts = scan_from(walls, truth, 5.0f, 0.01f, 7);
+    const Pose2 prior{truth.x + 0.42f, truth.y - 0.31f, truth.theta + 1.0f * kDeg};
+    const ScanMatchResult plain = scan_match(m.field.clearance(), pts, prior, wide);
+    const ScanMatchResult r = scan_match(m.field.clearance(), pts, prior, with);
+    ASSERT_EQ(r.status, ScanMatchStatus::kMatched);
+    EXPECT_EQ(plain.runner_up_score, 0.0f);  // not asked for
+    EXPECT_EQ(r.pose.x, plain.pose.x);
+    EXPECT_EQ(r.pose.y, plain.pose.y);
+    EXPECT_EQ(r.pose.theta, plain.pose.theta);
+    EXPECT_EQ(r.score, plain.score);
+    EXPECT_NEAR(r.pose.x, truth.x, 0.02f);
+    EXPECT_NEAR(r.pose.y, truth.y, 0.02f);
+    EXPECT_NEAR(r.runner_up_score, reference(m, pts, prior), 1e-4f);
+    EXPECT_GT(r.runner_up_score, 0.0f);
+    EXPECT_LT(r.runner_up_score, r.score - 0.3f) << r.runner_up_score << " vs " << r.score;
+  }
+  {  // a corridor along x: the scan fits anywhere along it
+    std::vector<Eigen::Vector2f> walls;
+    for (float t = 0.0f; t <= 7.8f; t += 0.02f) {
+      walls.emplace_back(t, 2.025f);
+      walls.emplace_back(t, 4.025f);
+    }
+    const Map m = map_of(walls);
+    const Pose2 truth{4.0f, 3.1f, 0.1f};
+    const auto pts = scan_from(walls, truth, 2.5f, 0.005f, 3);
+    const Pose2 prior{truth.x + 0.3f, truth.y - 0.3f, truth.theta};
+    const ScanMatchResult r = scan_match(m.field.clearance(), pts, prior, with);
+    ASSERT_EQ(r.status, ScanMatchStatus::kMatched);
+    EXPECT_NEAR(r.pose.y, truth.y, 0.02f);
+    EXPECT_NEAR(r.runner_up_score, reference(m, pts, prior), 1e-4f);
+    EXPECT_GT(r.runner_up_score, r.score - 0.05f) << r.runner_up_score << " vs " << r.score;
+  }
+  {  // too few points: nothing scored, no runner-up
+    const Map m = map_of(room_walls());
+    const std::vector<Eigen::Vector2f> few(3, Eigen::Vector2f(1.0f, 0.0f));
+    const ScanMatchResult r = scan_match(m.field.clearance(), few, Pose2{3.0f, 3.0f, 0.0f}, with);
+    EXPECT_EQ(r.status, ScanMatchStatus::kTooFewPoints);
+    EXPECT_EQ(r.runner_up_score, 0.0f);
+  }
+}
+
 TEST(ScanMatch, InvalidInputThrows) {
   const auto walls = room_walls();
   const Map m = map_of(walls);
@@ -325,6 +408,8 @@ TEST(ScanMatch, InvalidInputThrows) {
   expect_bad([](ScanMatchSettings& s) { s.prior_sigma_deg = std::numeric_limits<float>::infinity(); }, "prior_sigma_deg");
   expect_bad([](ScanMatchSettings& s) { s.min_points = 0; }, "min_points");
   expect_bad([](ScanMatchSettings& s) { s.min_score = 1.5f; }, "min_score");
+  expect_bad([](ScanMatchSettings& s) { s.runner_up_distance_m = -0.1f; }, "runner_up_distance_m");
+  expect_bad([](ScanMatchSettings& s) { s.runner_up_distance_m = std::nanf(""); }, "runner_up_distance_m");
   expect_bad([](ScanMatchSettings& s) { s.linear_window_m = 5.0f; s.linear_step_m = 0.001f; }, "linear_window_m / linear_step_m");
 }
 

@@ -27,6 +27,7 @@ struct Kidnap {
   std::size_t relocalizations = 0, held = 0, asked = 0;
   float error_m = 0.0f;  ///< of the last pose the corrector returned, against the truth
   int first_at = -1;     ///< the update after the carry that relocalised first (-1: none)
+  RelocalizationScores scores;  ///< of the last relocalisation
 };
 
 /// Every sensor's frame at the robot pose `truth` (frame noise seeded seed + sensor index), viewing
@@ -74,11 +75,13 @@ Kidnap kidnap(bool confirmed, bool contradicted = false) {
     if (first_at < 0 && corrector.relocalizations() > 0) first_at = k;
   }
   return {corrector.relocalizations(), corrector.relocalizations_held(), corrector.relocalizations_asked(),
-          std::hypot(at.x - truth.x, at.y - truth.y), first_at};
+          std::hypot(at.x - truth.x, at.y - truth.y), first_at, corrector.last_relocalization_scores()};
 }
 
 TEST(PoseCorrectorHold, AConfirmedOdometryHoldsTheWideRematch) {
   const Kidnap free = kidnap(false);
+  std::printf("carried 0.6 m: relocalised at a score of %.2f (prediction %.2f, best other fit %.2f)\n", free.scores.score, free.scores.prior,
+              free.scores.runner_up);
   EXPECT_GE(free.relocalizations, 1u);
   EXPECT_EQ(free.held, 0u);
   EXPECT_LT(free.error_m, 0.15f) << "relocalised";

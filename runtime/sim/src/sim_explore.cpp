@@ -340,6 +340,7 @@ ExploreSummary SimExplore::summary() const {
   s.relocalizations = rs.relocalizations;
   s.relocalizations_held = rs.relocalizations_held;
   s.relocalizations_new_space = rs.relocalizations_new_space;
+  s.relocalizations_ambiguous = rs.relocalizations_ambiguous;
   s.relocalizations_asked = rs.relocalizations_asked;
   s.occupied_on_obstacles = occupied_on_obstacles();
   return s;

@@ -59,6 +59,7 @@ void fields(V& v, ScanMatchSettings& s) {
   v("prior_sigma_deg", s.prior_sigma_deg);
   v("min_points", s.min_points);
   v("min_score", s.min_score);
+  v("runner_up_distance_m", s.runner_up_distance_m);
 }
 
 template <class V>
@@ -79,6 +80,8 @@ void fields(V& v, PoseCorrectionSettings& s) {
   v("relocalize_step_deg", s.relocalize_step_deg);
   v("relocalize_min_gain", s.relocalize_min_gain);
   v("relocalize_min_conflict", s.relocalize_min_conflict);
+  v("relocalize_min_margin", s.relocalize_min_margin);
+  v("relocalize_distinct_m", s.relocalize_distinct_m);
   v.section("match", [&](auto& w) { fields(w, s.match); });
 }
 
@@ -105,6 +108,7 @@ void fields(V& v, LoopClosureSettings& s) {
   v("min_hits", s.min_hits);
   v("max_conflict_ratio", s.max_conflict_ratio);
   v("min_prediction_conflict", s.min_prediction_conflict);
+  v("prediction_check_min_shift_m", s.prediction_check_min_shift_m);
   v("confirm_m", s.confirm_m);
   v("confirm_deg", s.confirm_deg);
   v("min_correction_m", s.min_correction_m);

@@ -52,6 +52,8 @@ void validate(const LoopClosureSettings& s) {
     bad("verify_free_m must be >= verify_hit_m, got " + std::to_string(s.verify_free_m));
   if (!(std::isfinite(s.min_prediction_conflict) && s.min_prediction_conflict >= 0.0f && s.min_prediction_conflict <= 1.0f))
     bad("min_prediction_conflict must be in [0, 1], got " + std::to_string(s.min_prediction_conflict));
+  if (!(std::isfinite(s.prediction_check_min_shift_m) && s.prediction_check_min_shift_m >= 0.0f))
+    bad("prediction_check_min_shift_m must be >= 0, got " + std::to_string(s.prediction_check_min_shift_m));
   if (!(std::isfinite(s.max_conflict_ratio) && s.max_conflict_ratio >= 0.0f))
     bad("max_conflict_ratio must be >= 0, got " + std::to_string(s.max_conflict_ratio));
   validate(s.graph);
@@ -225,6 +227,10 @@ bool LoopCloser::check(Mapper& mapper, const Pose2& at, double t, Pose2& match, 
   // points fall on old walls or on cells the old map never saw is not wrong; a lattice pose
   // that lays the new walls on old ones elsewhere then is an alias (a shelf's or a door's
   // repeat), not a loop.
+  // The correction's mean shift of the query's points (a turn moves far points more).
+  float shift = 0.0f;
+  for (const Eigen::Vector2f& q : query_) shift += (transform_point(off, q) - q).norm();
+  shift = query_.empty() ? 0.0f : shift / static_cast<float>(query_.size());
   {
     const float d = std::hypot(off.x, off.y);
     const float near_m = std::max(settings_.verify_hit_m, 0.5f * d);
@@ -239,9 +245,9 @@ bool LoopCloser::check(Mapper& mapper, const Pose2& at, double t, Pose2& match, 
     last_prior_conflict_ = query_.empty() ? 0.0f : static_cast<float>(contradicted) / static_cast<float>(query_.size());
   }
   const bool moves_map = beyond_min_correction(at, res_match.pose);
-  const bool unexplained =
-      moves_map && settings_.min_prediction_conflict > 0.0f && last_prior_conflict_ < settings_.min_prediction_conflict;
-  matches_.push_back({t, off, res_match.score, res_match.prior_score, last_prior_conflict_, moves_map, !unexplained});
+  const bool unexplained = moves_map && shift >= settings_.prediction_check_min_shift_m && settings_.min_prediction_conflict > 0.0f &&
+                           last_prior_conflict_ < settings_.min_prediction_conflict;
+  matches_.push_back({t, off, res_match.score, res_match.prior_score, last_prior_conflict_, shift, moves_map, !unexplained});
   if (unexplained) {
     ++stats_.rejected_unexplained;
     return false;

@@ -37,6 +37,9 @@ void validate(const PoseCorrectionSettings& s) {
   if (!in(s.relocalize_min_gain, 0.0f, 1.0f)) bad("relocalize_min_gain must be in (0, 1], got " + std::to_string(s.relocalize_min_gain));
   if (!(s.relocalize_min_conflict >= 0.0f && s.relocalize_min_conflict <= 1.0f))
     bad("relocalize_min_conflict must be in [0, 1], got " + std::to_string(s.relocalize_min_conflict));
+  if (!(s.relocalize_min_margin >= 0.0f && s.relocalize_min_margin <= 1.0f))
+    bad("relocalize_min_margin must be in [0, 1], got " + std::to_string(s.relocalize_min_margin));
+  if (!in(s.relocalize_distinct_m, 0.0f, 5.0f)) bad("relocalize_distinct_m must be in (0, 5] m, got " + std::to_string(s.relocalize_distinct_m));
 }
 
 PoseCorrector::PoseCorrector(const Profile& profile, const PoseCorrectionSettings& settings) : profile_(profile), settings_(settings) {
@@ -176,17 +179,22 @@ Pose2 PoseCorrector::update(const CameraPoints& points, std::span<const SensorFr
       wide.angular_step_deg = pc.relocalize_step_deg;
       wide.prior_sigma_m = 100.0f * pc.relocalize_window_m;  // no pull toward the prediction
       wide.prior_sigma_deg = 100.0f * pc.relocalize_window_deg;
+      wide.runner_up_distance_m = pc.relocalize_distinct_m;
       const ScanMatchResult w = scan_match(distance_.clearance(), scan_points_, prior, wide);
       // Clearly better than the prediction and a good fit in itself (a pushed robot's scan
       // scores ~0.96 at the found pose against ~0.01 at the prediction).
-      if (w.status == ScanMatchStatus::kMatched && w.score >= w.prior_score + pc.relocalize_min_gain &&
-          w.score >= pc.match.min_score + pc.relocalize_min_gain &&
-          std::hypot(w.pose.x - prior.x, w.pose.y - prior.y) > 0.5f * pc.match.linear_window_m) {
+      const bool clear = w.status == ScanMatchStatus::kMatched && w.score >= w.prior_score + pc.relocalize_min_gain &&
+                         w.score >= pc.match.min_score + pc.relocalize_min_gain &&
+                         std::hypot(w.pose.x - prior.x, w.pose.y - prior.y) > 0.5f * pc.match.linear_window_m;
+      // Another fit elsewhere in the window nearly as good: the scan does not say which.
+      const bool ambiguous = clear && pc.relocalize_min_margin > 0.0f && w.score < w.runner_up_score + pc.relocalize_min_margin;
+      if (ambiguous) ++relocalizations_ambiguous_;
+      if (clear && !ambiguous) {
         at = w.pose;
         relocalized = true;
         ++relocalizations_;
         last_relocalization_ = Pose2{w.pose.x - prior.x, w.pose.y - prior.y, std::remainder(w.pose.theta - prior.theta, kTwoPi)};
-        last_relocalization_scores_ = {w.score, w.prior_score};
+        last_relocalization_scores_ = {w.score, w.prior_score, w.runner_up_score};
       }
     }
     if (!relocalized && r.status == ScanMatchStatus::kMatched) {

@@ -286,6 +286,7 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
     stats_.scan_match_rejected = corrector_.rejected();
     stats_.relocalizations_held = corrector_.relocalizations_held();
     stats_.relocalizations_new_space = corrector_.relocalizations_new_space();
+    stats_.relocalizations_ambiguous = corrector_.relocalizations_ambiguous();
     stats_.relocalizations_asked = corrector_.relocalizations_asked();
     note_relocalization(corrector_.relocalizations(), corrector_.last_relocalization(), corrector_.last_relocalization_scores(),
                         corrector_.last_conflict(), now_s);
@@ -345,16 +346,17 @@ void ExplorationRuntime::tick(double now_s) {
   command_.add(runtime_wall_s() - w0);
 }
 
-void ExplorationRuntime::note_relocalization(std::size_t count, const Pose2& offset, std::pair<float, float> scores, float conflict,
+void ExplorationRuntime::note_relocalization(std::size_t count, const Pose2& offset, const RelocalizationScores& scores, float conflict,
                                              double now_s) {
   if (count == stats_.relocalizations) return;
   stats_.relocalizations = count;
   char buf[256];
   std::snprintf(buf, sizeof buf,
-                "the scan matched %.3f m / %.1f deg from the odometry's prediction (score %.2f there, %.2f at the prediction; "
-                "%.0f %% of it on cells the map holds free at the prediction), beyond the matcher's window: relocalised",
-                std::hypot(offset.x, offset.y), offset.theta * 180.0f / std::numbers::pi_v<float>, scores.first, scores.second,
-                100.0f * conflict);
+                "the scan matched %.3f m / %.1f deg from the odometry's prediction (score %.2f there, %.2f at the prediction, "
+                "%.2f at the best other fit; %.0f %% of it on cells the map holds free at the prediction), beyond the matcher's "
+                "window: relocalised",
+                std::hypot(offset.x, offset.y), offset.theta * 180.0f / std::numbers::pi_v<float>, scores.score, scores.prior,
+                scores.runner_up, 100.0f * conflict);
   guard_.note(now_s, buf);
 }
 

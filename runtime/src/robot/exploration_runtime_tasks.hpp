@@ -58,8 +58,9 @@ struct ExplorationRuntime::Result {
   std::vector<RgbdImage> images;          ///< to recycle on the control thread
   std::size_t scan_matches = 0, scan_match_rejected = 0, loop_closures = 0;
   std::size_t relocalizations = 0, relocalizations_held = 0, relocalizations_asked = 0, relocalizations_new_space = 0;
+  std::size_t relocalizations_ambiguous = 0;
   Pose2 relocalization;
-  std::pair<float, float> relocalization_scores{0.0f, 0.0f};
+  RelocalizationScores relocalization_scores;
   float relocalization_conflict = 0.0f;
   double now_s = 0.0;
   double scan_match_time_s = 0.0;

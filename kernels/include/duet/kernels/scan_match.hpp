@@ -25,6 +25,9 @@
 /// S reaches min_score; else kNotConfident (too little structure or a bad map) or
 /// kTooFewPoints, and `pose` is the prior.
 ///
+/// Runner-up (optional, runner_up_distance_m): the coarse lattice's scores are kept, and the best
+/// S farther than that distance from the coarse best is reported; it does not change the match.
+///
 /// Determinism: ties go to the candidate with the lowest lattice index; the result does not
 /// depend on the thread count.
 /// Thread safety: reentrant; parallel inside (TBB, over angles) in the caller's task arena.
@@ -52,6 +55,10 @@ struct ScanMatchSettings {
   float prior_sigma_deg = 2.0f;      ///< std of the heading prior [deg], (0, inf)
   std::size_t min_points = 50;       ///< fewer points: kTooFewPoints, >= 1
   float min_score = 0.35f;           ///< best mean score below this: kNotConfident, [0, 1]
+  /// > 0: also report the runner-up (ScanMatchResult::runner_up_score), the best S of the coarse
+  /// lattice's candidates whose translation lies farther than this from the coarse best's [m],
+  /// [0, 5]; 0 = not computed (no extra work).
+  float runner_up_distance_m = 0.0f;
 };
 /// Throws duet::Error(kInvalidArgument) naming the bad field.
 void validate(const ScanMatchSettings& s);
@@ -68,6 +75,11 @@ struct ScanMatchResult {
   float score = 0.0f;         ///< S of `pose` (mean per point, [0, 1])
   float prior_score = 0.0f;   ///< S of the prior
   std::size_t candidates = 0; ///< poses scored
+  /// With ScanMatchSettings::runner_up_distance_m > 0: the best S of a coarse candidate that
+  /// places the scan elsewhere (translation farther than that from the coarse best, any
+  /// heading); 0 when there is none. A runner-up near `score` means the window holds two fits:
+  /// the match is ambiguous (a corridor's repeat, a second room of the same shape).
+  float runner_up_score = 0.0f;
 };
 
 /// The distance field scan_match() reads: inflate() of `grid` with only occupied cells blocking

@@ -81,6 +81,7 @@ struct LoopMatchRecord {
   float score = 0.0f;              ///< the match's score
   float prior_score = 0.0f;        ///< the prediction's score against the same old map
   float prediction_conflict = 0.0f;  ///< the share of the query on old free floor at the prediction, [0, 1]
+  float shift_m = 0.0f;            ///< the correction's mean shift of the query's points [m]
   bool moves_map = false;          ///< beyond min_correction_m / min_correction_deg
   bool accepted = false;           ///< passed the prediction check (a candidate for confirmation)
 };

@@ -38,6 +38,13 @@ struct LoopClosureSettings {
   /// wide window then finds an alias that lays the new walls on old ones (the lab's shelves:
   /// 0.9 m along an aisle with the pose 0.05 m from the truth, issue 23).
   float min_prediction_conflict = 0.03f;
+  /// The check above applies to corrections that move the query's points by at least this on
+  /// average [m], >= 0. A smaller drift leaves a wall's points within about verify_hit_m plus a
+  /// cell of the old wall, so the old map cannot contradict the prediction whether it is right
+  /// or not: the check has no power there, and turning such matches down only keeps a small
+  /// drift in (freiburg-101: ten 0.10-0.13 m corrections of a pose 0.8-0.9 m off turned down).
+  /// An alias's shift is a shelf's or a door's repeat, far above it (the lab's: 0.86 m).
+  float prediction_check_min_shift_m = 0.20f;
   float confirm_m = 0.15f;           ///< two consecutive matches confirm a loop when their offsets agree within this [m]
   float confirm_deg = 1.5f;          ///< ... and this [deg]
   float min_correction_m = 0.10f;    ///< optimise when a confirmed loop is off the graph by more than this [m]

@@ -61,6 +61,11 @@ struct PoseCorrectionSettings {
   /// false fit of the new walls on old ones (freiburg-101: 1.3 m / 20.7 deg at 140 s, issue 23).
   /// Vision's request to re-match (VisualLocalization) is not subject to it.
   float relocalize_min_conflict = 0.05f;
+  /// ... and only when it is not ambiguous: its score must beat, by this, the best score of any
+  /// other fit in the window - a pose farther than relocalize_distinct_m from it (the wide
+  /// match's runner-up, ScanMatchSettings::runner_up_distance_m), [0, 1]; 0 = no such check.
+  float relocalize_min_margin = 0.0f;
+  float relocalize_distinct_m = 0.3f;  ///< [m], (0, 5]
 };
 void validate(const PoseCorrectionSettings& s);
 

@@ -24,6 +24,13 @@ namespace duet {
 
 
 
+/// A relocalisation's mean scan scores, [0, 1].
+struct RelocalizationScores {
+  float score = 0.0f;      ///< at the new pose
+  float prior = 0.0f;      ///< at the prediction
+  float runner_up = 0.0f;  ///< of the best other fit in the wide window (PoseCorrectionSettings::relocalize_distinct_m away)
+};
+
 class PoseCorrector {
  public:
   PoseCorrector(const Profile& profile, const PoseCorrectionSettings& settings);
@@ -73,8 +80,12 @@ class PoseCorrector {
   [[nodiscard]] float last_conflict() const noexcept { return last_conflict_; }
   /// Wide re-matches tried because another sensor contradicted the odometry (contradict_odometry).
   [[nodiscard]] std::size_t relocalizations_asked() const noexcept { return relocalizations_asked_; }
-  /// The last relocalisation's mean scan score at the new pose and at the prediction, [0, 1].
-  [[nodiscard]] std::pair<float, float> last_relocalization_scores() const noexcept { return last_relocalization_scores_; }
+  /// Wide re-matches that would have moved the pose but had a runner-up within
+  /// relocalize_min_margin of their score (ambiguous): not taken.
+  [[nodiscard]] std::size_t relocalizations_ambiguous() const noexcept { return relocalizations_ambiguous_; }
+  /// The last relocalisation's mean scan score at the new pose, at the prediction and of its
+  /// runner-up (the best fit farther than relocalize_distinct_m from it), [0, 1].
+  [[nodiscard]] const RelocalizationScores& last_relocalization_scores() const noexcept { return last_relocalization_scores_; }
   [[nodiscard]] double time_s() const noexcept { return time_s_; }  ///< wall time spent [s]
 
  private:
@@ -105,7 +116,8 @@ class PoseCorrector {
   bool odometry_confirmed_ = false;
   bool relocalize_asked_ = false;
   Pose2 last_relocalization_;
-  std::pair<float, float> last_relocalization_scores_{0.0f, 0.0f};
+  RelocalizationScores last_relocalization_scores_;
+  std::size_t relocalizations_ambiguous_ = 0;
   double time_s_ = 0.0;
 };
 

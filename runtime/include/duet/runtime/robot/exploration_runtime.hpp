@@ -75,6 +75,7 @@ struct RuntimeStats {
   std::uint64_t blind_holds = 0;         ///< control periods held still: no frame mapped for too long
   std::size_t relocalizations = 0;       ///< wide re-matches that moved the pose (pushed, slipped)
   std::size_t relocalizations_held = 0;  ///< wide re-matches not tried: vision confirmed the odometry
+  std::size_t relocalizations_ambiguous = 0;   ///< wide re-matches not taken: another fit in the window nearly as good
   std::size_t relocalizations_new_space = 0;  ///< wide re-matches not tried: the scan saw new space, the map did not contradict the prediction
   std::size_t relocalizations_asked = 0; ///< wide re-matches tried at once: vision gated out a jump the wheels did not make
   VisualLocalizationStats visual;        ///< visual odometry + EKF (all 0 when localization.visual_odometry is off)
@@ -187,7 +188,7 @@ class ExplorationRuntime {
   [[nodiscard]] Pose2 odometry_at(double t, const OdometryMsg& fallback) const;
   /// The inputs' time base stepped back: a new synchronizer and odometry history.
   void restart_time();
-  void note_relocalization(std::size_t count, const Pose2& offset, std::pair<float, float> scores, float conflict, double now_s);
+  void note_relocalization(std::size_t count, const Pose2& offset, const RelocalizationScores& scores, float conflict, double now_s);
   void take_inputs(double now_s);
   /// Visual odometry on a synchronised set (all sensors' frames), the EKF's update, the health;
   /// in kBackground the front end runs on visual_worker_ and finish_visual() fuses its result.
