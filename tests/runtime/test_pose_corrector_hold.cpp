@@ -4,6 +4,7 @@
 // runtime: a kidnapped robot with vision fused is still relocalised (its first view after the
 // move is a visual jump the gate rejects, so vision does not confirm the wheels then, and the
 // jump asks for the wide re-match at once: contradict_odometry).
+#include <duet/kernels/error.hpp>
 #include <duet/runtime/config/profile.hpp>
 #include <duet/runtime/localization/pose_corrector.hpp>
 #include <duet/runtime/mapping/mapper.hpp>
@@ -24,7 +25,7 @@ namespace duet {
 namespace test_pose_corrector_hold {
 
 struct Kidnap {
-  std::size_t relocalizations = 0, held = 0, asked = 0;
+  std::size_t relocalizations = 0, held = 0, asked = 0, ambiguous = 0;
   float error_m = 0.0f;  ///< of the last pose the corrector returned, against the truth
   int first_at = -1;     ///< the update after the carry that relocalised first (-1: none)
   RelocalizationScores scores;  ///< of the last relocalisation
@@ -45,8 +46,9 @@ std::vector<SensorFrame> render_frames(const sim::RgbdRenderer& renderer, const 
 
 /// `confirmed`: confirm_odometry(true) from the carry on; `contradicted`: contradict_odometry()
 /// before the first update after it (vision gated out the jump).
-Kidnap kidnap(bool confirmed, bool contradicted = false) {
-  const Profile profile = builtin_profile("dual");
+Kidnap kidnap(bool confirmed, bool contradicted = false, float min_margin = PoseCorrectionSettings{}.relocalize_min_margin) {
+  Profile profile = builtin_profile("dual");
+  profile.runtime.pose_correction.relocalize_min_margin = min_margin;
   const sim::World world = sim::builtin_world("lab");
   const sim::RgbdRenderer renderer(world);
   Mapper mapper(profile.mapping);
@@ -75,7 +77,7 @@ Kidnap kidnap(bool confirmed, bool contradicted = false) {
     if (first_at < 0 && corrector.relocalizations() > 0) first_at = k;
   }
   return {corrector.relocalizations(), corrector.relocalizations_held(), corrector.relocalizations_asked(),
-          std::hypot(at.x - truth.x, at.y - truth.y), first_at, corrector.last_relocalization_scores()};
+          corrector.relocalizations_ambiguous(), std::hypot(at.x - truth.x, at.y - truth.y), first_at, corrector.last_relocalization_scores()};
 }
 
 TEST(PoseCorrectorHold, AConfirmedOdometryHoldsTheWideRematch) {
@@ -89,6 +91,30 @@ TEST(PoseCorrectorHold, AConfirmedOdometryHoldsTheWideRematch) {
   EXPECT_EQ(held.relocalizations, 0u);
   EXPECT_GE(held.held, 1u);
   EXPECT_GT(held.error_m, 0.3f) << "the pose stays with the confirmed odometry";
+}
+
+// The wide re-match's runner-up: the carried robot's scan fits its true place at ~0.93 and
+// nowhere else in the window above ~0.56. A margin below that gap keeps the relocalisation; one
+// above it turns it down as ambiguous (counted), and the pose stays with the odometry.
+TEST(PoseCorrectorHold, AnAmbiguousWideRematchIsNotTaken) {
+  const Kidnap plain = kidnap(false);
+  ASSERT_GE(plain.relocalizations, 1u);
+  const float gap = plain.scores.score - plain.scores.runner_up;
+  ASSERT_GT(gap, 0.15f) << "the lab's carry is not a clear relocalisation any more";
+  const Kidnap kept = kidnap(false, false, gap - 0.1f);
+  EXPECT_GE(kept.relocalizations, 1u);
+  EXPECT_EQ(kept.ambiguous, 0u);
+  EXPECT_LT(kept.error_m, 0.15f);
+  const Kidnap refused = kidnap(false, false, gap + 0.05f);
+  EXPECT_EQ(refused.relocalizations, 0u);
+  EXPECT_GE(refused.ambiguous, 1u);
+  EXPECT_GT(refused.error_m, 0.3f) << "the pose stays with the odometry";
+  PoseCorrectionSettings bad;
+  bad.relocalize_min_margin = 1.5f;
+  EXPECT_THROW(validate(bad), Error);
+  bad = {};
+  bad.relocalize_distinct_m = 0.0f;
+  EXPECT_THROW(validate(bad), Error);
 }
 
 // Vision saw the jump (a gated visual increment): the wide re-match runs at the very next update,
