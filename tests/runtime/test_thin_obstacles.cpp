@@ -90,8 +90,7 @@ TEST(ThinObstacles, APostTooNearForTheSensorsIsNotErasedByTheRaysPassingBesideIt
     SCOPED_TRACE(name);
     duet::Profile prof = duet::builtin_profile(name);
     const float occupied = prof.exploration.cells.occupied_logodds;
-    // The profiles leave it off (it can pin a robot whose pose is off beside a kept post, see
-    // bench/RESULTS.md "Stop 42"); the value they would take: the minimum depth plus two cells.
+    // The profiles' value (the minimum depth plus two cells), set here so the test holds if they change.
     prof.mapping.grid_update.keep_occupied_within_m = 0.6f;
     const std::vector<float> kept = pass_post(prof, poses, post);
     prof.mapping.grid_update.keep_occupied_within_m = 0.0f;
