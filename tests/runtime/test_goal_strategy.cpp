@@ -135,3 +135,41 @@ TEST(GoalStrategy, DefaultStrategiesAlone) {
   EXPECT_FALSE(alone(std::make_unique<duet::RelaxedFrontierGoal>(p, p.runtime.explorer))->goal().has_value());
   EXPECT_FALSE(alone(std::make_unique<duet::ViewGoal>(p, p.runtime.explorer))->goal().has_value());
 }
+
+// ExplorerSettings::stagnation_s: Procedure 1's reward counts re-observing known cells, so it can
+// stay above eps_R where nothing new is left near the robot (belgioioso seed 3 wandered 750 s
+// so). With the map not growing, after stagnation_s the nearest frontier replaces the simulated
+// goal (counted); without it Procedure 1's goal is kept.
+TEST(GoalStrategy, AMapThatStopsGrowingHandsOverToTheNearestFrontier) {
+  const duet::Pose2 robot{1.0f, 1.5f, 0.0f};
+  auto run = [&](float stagnation_s) {
+    duet::Profile p = duet::builtin_profile("dual");
+    p.runtime.explorer.stagnation_s = stagnation_s;
+    std::vector<std::unique_ptr<duet::GoalStrategy>> list;
+    list.push_back(std::make_unique<duet::ExplorationGoal>(p, p.runtime.explorer));
+    duet::Navigator nav(p, p.runtime.explorer, std::move(list));
+    std::vector<duet::ExplorationStatus> statuses;
+    for (double t = 0.0; t <= 90.0; t += 10.0) {
+      nav.update_map(half_known_room(), robot, t);  // the same map: the reachable area does not grow
+      nav.decide(robot, t);
+      statuses.push_back(nav.last_decision().status);
+      nav.goal_reached(nav.goal_id(), t + 1.0);  // so the next call decides again
+    }
+    return std::make_pair(statuses, nav.stats().stagnation_frontier_goals);
+  };
+  const auto [off, off_count] = run(0.0f);
+  ASSERT_EQ(off.front(), duet::ExplorationStatus::kSimulatedGoal) << "Procedure 1 offers no goal here: the scene tests nothing";
+  for (const auto s : off) EXPECT_EQ(s, duet::ExplorationStatus::kSimulatedGoal);
+  EXPECT_EQ(off_count, 0);
+  const auto [on, on_count] = run(45.0f);
+  // t = 0..40 s: Procedure 1's goals; from 50 s (45 s without growth) the nearest frontier.
+  for (std::size_t k = 0; k < on.size(); ++k)
+    EXPECT_EQ(on[k], k * 10 < 45 ? duet::ExplorationStatus::kSimulatedGoal : duet::ExplorationStatus::kFrontierGoal) << "t = " << k * 10;
+  EXPECT_EQ(on_count, 5);
+  duet::ExplorerSettings bad = duet::builtin_profile("dual").runtime.explorer;
+  bad.stagnation_min_m2 = 0.0f;
+  EXPECT_THROW(duet::validate(bad), duet::Error);
+  bad = duet::builtin_profile("dual").runtime.explorer;
+  bad.stagnation_s = -1.0f;
+  EXPECT_THROW(duet::validate(bad), duet::Error);
+}
