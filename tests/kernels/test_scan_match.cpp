@@ -54,6 +54,16 @@ std::vector<Eigen::Vector2f> room_walls() {
   return w;
 }
 
+/// Two parallel walls 2 m apart along x (y = 2.025 and 4.025 m, 7.8 m long), every 2 cm.
+std::vector<Eigen::Vector2f> corridor_walls() {
+  std::vector<Eigen::Vector2f> w;
+  for (float t = 0.0f; t <= 7.8f; t += 0.02f) {
+    w.emplace_back(t, 2.025f);
+    w.emplace_back(t, 4.025f);
+  }
+  return w;
+}
+
 Map map_of(const std::vector<Eigen::Vector2f>& walls, int w = 160, int h = 120) {
   Map m;
   m.w = w;
@@ -119,11 +129,7 @@ TEST(ScanMatch, RecoversAnOffsetInARoom) {
 // Two parallel walls 2 m apart along x: the offset across the corridor and the heading are
 // corrected, the one along it is not (the scan does not constrain it): the prior is kept.
 TEST(ScanMatch, KeepsThePriorAlongACorridor) {
-  std::vector<Eigen::Vector2f> walls;
-  for (float t = 0.0f; t <= 7.8f; t += 0.02f) {
-    walls.emplace_back(t, 2.025f);
-    walls.emplace_back(t, 4.025f);
-  }
+  const std::vector<Eigen::Vector2f> walls = corridor_walls();
   const Map m = map_of(walls);
   const Pose2 truth{4.0f, 3.1f, 0.1f};
   const auto pts = scan_from(walls, truth, 3.0f, 0.005f, 3);
@@ -338,11 +344,7 @@ TEST(ScanMatch, RunnerUpIsTheBestFitElsewhere) {
     EXPECT_LT(r.runner_up_score, r.score - 0.3f) << r.runner_up_score << " vs " << r.score;
   }
   {  // a corridor along x: the scan fits anywhere along it
-    std::vector<Eigen::Vector2f> walls;
-    for (float t = 0.0f; t <= 7.8f; t += 0.02f) {
-      walls.emplace_back(t, 2.025f);
-      walls.emplace_back(t, 4.025f);
-    }
+    const std::vector<Eigen::Vector2f> walls = corridor_walls();
     const Map m = map_of(walls);
     const Pose2 truth{4.0f, 3.1f, 0.1f};
     const auto pts = scan_from(walls, truth, 2.5f, 0.005f, 3);
