@@ -704,7 +704,7 @@ DUET_API void duet_partial_sim_settings_init(duet_partial_sim_settings* settings
 typedef struct duet_exploration_settings {
   duet_partial_sim_settings simulation;
   duet_frontier_settings frontier;
-  float eps_r_bits;     /* eps_R [bits], finite, >= 0 (default 1.0: about 30 newly seen cells) */
+  float eps_r_bits;     /* eps_R [bits], finite, >= 0 (default 1.0; R_g counts re-seen cells too, the paper's test) */
   int use_simulation;   /* 1 = Fig. 6; 0 = frontier search only (explore_lite-like) (default 1) */
 } duet_exploration_settings;
 

@@ -77,7 +77,9 @@ ExplorationDecision decide_goal(const ObservationModel& model, const InflatedGri
     }
     tg.wait();
     d.reward_bits = d.simulation.reward_bits;
-    if (d.simulation.found && d.simulation.reward_bits > s.eps_r_bits) {  // Fig. 6: R_g > eps_R
+    // Fig. 6: R_g > eps_R (or only R_g's part from unknown cells, eps_r_unknown_only).
+    const float tested = s.eps_r_unknown_only ? d.simulation.unknown_reward_bits : d.simulation.reward_bits;
+    if (d.simulation.found && tested > s.eps_r_bits) {
       const Eigen::Vector2f g(d.simulation.goal.x, d.simulation.goal.y);
       if (!blacklist.blocks(g, s.frontier.blacklist_radius_m, now_s)) {
         d.status = ExplorationStatus::kSimulatedGoal;

@@ -73,6 +73,7 @@ struct Particle {
   double log_w = 0.0;       // log w_i^(n)
   bool valid = false;
   float reward_mean = 0.0f; // mean over j of sum_t R_{t,j} (bits)
+  float unknown_reward_mean = 0.0f; // the part of reward_mean from cells whose state is unknown (bits)
   std::int64_t visits = 0;
 };
 
@@ -202,7 +203,7 @@ void observe_particle(const ObservationModel& model, std::span<const SensorSecto
   const float inv_log_q = 1.0f / std::log1p(-s.unknown_hit_probability);
 
   double log_w = 0.0;
-  double reward_sum = 0.0;
+  double reward_sum = 0.0, unknown_sum = 0.0;
   std::int64_t visits = 0;
   for (int j = 0; j < phi; ++j) {
     const std::uint32_t stamp = ts.next_stamp(n_cells);
@@ -214,7 +215,7 @@ void observe_particle(const ObservationModel& model, std::span<const SensorSecto
       // Lines 15-16 for a never-observed cell (prior 0, E = 1 bit), the same for all of them.
       const float r_hit_nan = 1.0f - et(std::clamp(l_hit, s.min_logodds, s.max_logodds));
       const float r_miss_nan = 1.0f - et(std::clamp(l_miss, s.min_logodds, s.max_logodds));
-      float r_k = 0.0f;
+      float r_k = 0.0f, r_unknown = 0.0f;
       for (std::size_t r = 0; r < rays_per_stage; ++r) {
         const std::size_t ray = static_cast<std::size_t>(k) * rays_per_stage + r;
         const std::uint32_t begin = ray == 0 ? 0u : ts.ray_end[ray - 1];
@@ -250,10 +251,14 @@ void observe_particle(const ObservationModel& model, std::span<const SensorSecto
             --unknown_left;
           }
           if (kind == kUnknownNan) {
-            r_k += hit ? r_hit_nan : r_miss_nan;  // 1 bit - E(clamp(l_ISM))
+            const float r = hit ? r_hit_nan : r_miss_nan;  // 1 bit - E(clamp(l_ISM))
+            r_k += r;
+            r_unknown += r;
           } else {
             const float post = std::clamp(cell.l + (hit ? l_hit : l_miss), s.min_logodds, s.max_logodds);  // line 15
-            r_k += et(cell.l) - et(post);  // line 16
+            const float r = et(cell.l) - et(post);  // line 16
+            r_k += r;
+            if (kind == kUnknownFinite) r_unknown += r;
           }
           if (idx != kOutside) ov[idx] = (stamp << 1) | (hit ? 1u : 0u);
           if (hit) break;
@@ -261,11 +266,13 @@ void observe_particle(const ObservationModel& model, std::span<const SensorSecto
       }
       disc_sum += std::pow(static_cast<double>(s.gamma), static_cast<double>(k - H)) * r_k;  // line 19 term
       reward_sum += r_k;
+      unknown_sum += r_unknown;
     }
     log_w += disc_sum > 0.0 ? std::log(disc_sum) : -std::numeric_limits<double>::infinity();
   }
   part.log_w += log_w;
   part.reward_mean = static_cast<float>(reward_sum / phi);
+  part.unknown_reward_mean = static_cast<float>(unknown_sum / phi);
   part.visits = visits;
 }
 
@@ -311,6 +318,7 @@ PartialSimResult partial_map_simulation(const ObservationModel& model, const Inf
     p.log_w = 0.0;
     p.valid = false;
     p.reward_mean = 0.0f;
+    p.unknown_reward_mean = 0.0f;
     p.visits = 0;
   }
   PartialSimResult result;
@@ -338,6 +346,7 @@ PartialSimResult partial_map_simulation(const ObservationModel& model, const Inf
         }
         part.valid = rollout(inflated, x0, s, part.u, part.x);  // line 9
         part.reward_mean = 0.0f;
+        part.unknown_reward_mean = 0.0f;
         part.visits = 0;
         if (!part.valid) {
           part.log_w = -std::numeric_limits<double>::infinity();
@@ -402,6 +411,7 @@ PartialSimResult partial_map_simulation(const ObservationModel& model, const Inf
     result.best_particle = static_cast<int>(best);
     result.goal = pb.x.back();
     result.reward_bits = pb.reward_mean;
+    result.unknown_reward_bits = pb.unknown_reward_mean;
     result.best_trajectory = pb.x;
     result.best_motions = pb.u;
   }

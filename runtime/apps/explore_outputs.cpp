@@ -184,6 +184,7 @@ nlohmann::json run_log(const sim::SimExplore& run) {
     j["decisions"].push_back({{"t_s", d.t_s},
                               {"status", duet::to_string(d.status)},
                               {"reward_bits", d.reward_bits},
+                              {"unknown_reward_bits", d.unknown_reward_bits},
                               {"robot", {d.robot.x, d.robot.y, d.robot.theta}},
                               {"goal", {d.goal.x, d.goal.y, d.goal.theta}},
                               {"planned", d.planned},

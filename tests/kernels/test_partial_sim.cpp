@@ -184,6 +184,57 @@ TEST(PartialSim, RewardMatchesHandComputationOnKnownFreeCells) {
   }
   const double per_cell = static_cast<double>(entropy_bits(-0.4f)) - static_cast<double>(entropy_bits(-0.8f));
   EXPECT_NEAR(r.reward_bits, per_cell * static_cast<double>(cells.size()), 1e-3 * per_cell * static_cast<double>(cells.size()));
+  EXPECT_EQ(r.unknown_reward_bits, 0.0f) << "every cell is known free: nothing new to see";
+}
+
+// R_g split by the cells' state against a hand computation: clamped free space with 2 x 2 islands
+// of known-free cells at l = -0.4 and of never-observed cells (NaN) scattered over it (fixed seed,
+// none within 1.5 m of the robot's path). With chi tiny every unknown cell is sampled free, so a
+// crossed island cell adds E(-0.4) - E(-0.8) (known) or 1 - E(-0.4) (unknown); only the unknown
+// ones count in unknown_reward_bits.
+TEST(PartialSim, UnknownRewardCountsOnlyTheCellsOfUnknownState) {
+  TestGrid g(400, 400);
+  g.fill(0, 0, 400, 400, kFreeL);
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> pos(0, 398);
+  for (int i = 0; i < 800; ++i) {
+    const int x = pos(rng), y = pos(rng);
+    g.fill(x, y, x + 2, y + 2, i % 2 == 0 ? -0.4f : kUnknown);
+  }
+  const Pose2 robot{10.02f, 9.97f, 0.7f};
+  for (int y = 0; y < 400; ++y)
+    for (int x = 0; x < 400; ++x)
+      if (std::hypot((x + 0.5f) * 0.05f - 10.4f, (y + 0.5f) * 0.05f - 10.3f) < 2.0f) g.at(x, y) = kFreeL;
+  Prepared p(g);
+  PartialSimSettings s = one_straight_sample();
+  s.unknown_hit_probability = 1e-9f;
+  const auto sensors = paper_dual_sensors(30);
+  PartialSimWorkspace ws;
+  const PartialSimResult r = partial_map_simulation(p.model, p.inflated, robot, sensors, s, ws);
+  ASSERT_TRUE(r.found);
+  const Pose2 x1 = motion_step(robot, Twist{1.0f, 0.0f}, 1.0f);
+  std::set<std::pair<int, int>> known, unknown;
+  for (const SensorSector& sec : sensors) {
+    std::vector<Eigen::Vector2f> o(static_cast<std::size_t>(sec.rays)), d(static_cast<std::size_t>(sec.rays));
+    sector_rays(x1, sec, o, d);
+    for (std::size_t i = 0; i < o.size(); ++i)
+      walk_cells(g.view(), o[i], d[i], sec.min_range_m, sec.max_range_m, [&](int ix, int iy, float, float) {
+        if (!g.view().in_bounds(ix, iy)) return true;
+        const float l = g.at(ix, iy);
+        if (std::isnan(l)) unknown.insert({ix, iy});
+        else if (l == -0.4f) known.insert({ix, iy});
+        return true;
+      });
+  }
+  ASSERT_GT(known.size(), 10u) << "the fans must cross both kinds of island for this test to mean anything";
+  ASSERT_GT(unknown.size(), 10u);
+  const double per_known = static_cast<double>(entropy_bits(-0.4f)) - static_cast<double>(entropy_bits(-0.8f));
+  const double per_unknown = 1.0 - static_cast<double>(entropy_bits(-0.4f));
+  const double want_unknown = per_unknown * static_cast<double>(unknown.size());
+  const double want_all = want_unknown + per_known * static_cast<double>(known.size());
+  EXPECT_NEAR(r.unknown_reward_bits, want_unknown, 1e-3 * want_all);
+  EXPECT_NEAR(r.reward_bits, want_all, 1e-3 * want_all);
+  EXPECT_LT(r.unknown_reward_bits, r.reward_bits);
 }
 
 // The same hand computation where the walks jump: known free space at the clamp (reward exactly
@@ -333,6 +384,37 @@ TEST(Exploration, LowRewardFallsBackToTheFrontier) {
   // After expiry the door is a goal again.
   const ExplorationDecision d3 = decide_goal(p.model, p.inflated, Pose2{2.0f, 5.0f, 3.14159f}, sensors, bl, 61.0, s, ws);
   EXPECT_EQ(d3.status, ExplorationStatus::kFrontierGoal) << to_string(d3.status);
+}
+
+// A closed room whose floor was seen free only once (l = -0.4, free but not certain): the paper's
+// test takes a goal inside it (seeing the floor again removes ~0.08 bits a cell, far above eps_R);
+// counting only unknown cells (eps_r_unknown_only), nothing is left to see and the frontier search
+// says so.
+TEST(Exploration, AGoalThatOnlyConfirmsKnownCellsIsNotTakenWhenOnlyUnknownCellsCount) {
+  TestGrid g(120, 120);
+  g.room(10, 10, 110, 110);
+  g.fill(10, 10, 110, 110, -0.4f);
+  Prepared p(g);
+  const auto sensors = paper_dual_sensors(30);
+  ExplorationWorkspace ws;
+  ExplorationSettings s;
+  GoalBlacklist bl;
+  const Pose2 robot{3.0f, 3.0f, 0.0f};
+  const ExplorationDecision paper = decide_goal(p.model, p.inflated, robot, sensors, bl, 0.0, s, ws);
+  EXPECT_EQ(paper.status, ExplorationStatus::kSimulatedGoal) << to_string(paper.status);
+  EXPECT_GT(paper.reward_bits, s.eps_r_bits);
+  EXPECT_EQ(paper.simulation.unknown_reward_bits, 0.0f);
+  s.eps_r_unknown_only = true;
+  const ExplorationDecision unknown_only = decide_goal(p.model, p.inflated, robot, sensors, bl, 0.0, s, ws);
+  EXPECT_EQ(unknown_only.status, ExplorationStatus::kNoFrontier) << to_string(unknown_only.status);
+  EXPECT_FALSE(unknown_only.has_goal());
+  EXPECT_EQ(unknown_only.reward_bits, paper.reward_bits) << "the same simulation; only the test differs";
+  // With the door of door_room() the unknown beyond it is worth the trip under either test.
+  const TestGrid dg = door_room();
+  Prepared dp(dg);
+  const ExplorationDecision door = decide_goal(dp.model, dp.inflated, Pose2{4.0f, 5.0f, 0.0f}, sensors, bl, 0.0, s, ws);
+  EXPECT_EQ(door.status, ExplorationStatus::kSimulatedGoal) << to_string(door.status);
+  EXPECT_GT(door.simulation.unknown_reward_bits, s.eps_r_bits);
 }
 
 // The door of door_room() replaced by a walled passage of 0.2 m (narrower than the robot) that

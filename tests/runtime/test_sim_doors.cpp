@@ -217,3 +217,47 @@ TEST(SimDoors, APlaceLookedAtWhileItsDoorWasShutIsLookedAtAgainBeforeTheRobotSto
     }
   }
 }
+
+TEST(SimDoors, TheViewGoalsStopWhenLookingNoLongerAddsToTheMap) {
+  // The gap room looked at with the default number of looks: without a budget the robot looks
+  // until no place is left to look at; with a budget no window can meet (1e6 m^2 in 5 s) it
+  // looks once (the window begins at the first decision with every frontier unreachable) and
+  // stops at the first check, saying why.
+  double t_off = -1.0;
+  int views_off = -1;
+  for (const float min_gain : {0.0f, 1e6f}) {
+    auto es = door_settings(1, 600.0);
+    es.runtime.explorer.view_min_gain_m2 = min_gain;
+    es.runtime.explorer.view_gain_window_s = 5.0f;
+    duet::sim::SimExplore run(duet::sim::parse_world(kGapRoom, "gap_room.yaml"), duet::builtin_profile("dual_kinect_kobuki"), es);
+    run.run();
+    const auto s = run.summary();
+    std::printf("view_min_gain_m2 %g: stopped at %.1f s, %d view goals, coverage %.3f: %s\n", static_cast<double>(min_gain), s.sim_time_s,
+                s.explorer.view_goals, s.coverage, s.stop_detail.c_str());
+    EXPECT_EQ(s.stop_reason, duet::sim::StopReason::kExplorerDone) << s.stop_detail;
+    EXPECT_EQ(s.collisions, 0u);
+    EXPECT_GE(s.explorer.view_goals, 1) << s.stop_detail;
+    const bool noted = s.stop_detail.find("looking at them from view goals added") != std::string::npos;
+    if (min_gain == 0.0f) {
+      EXPECT_FALSE(noted) << s.stop_detail;
+      t_off = s.sim_time_s;
+      views_off = s.explorer.view_goals;
+    } else {
+      EXPECT_TRUE(noted) << s.stop_detail;
+      EXPECT_NE(s.stop_detail.find("unreachable through a gap of"), std::string::npos) << "the report of what is left is kept: " << s.stop_detail;
+      EXPECT_LT(s.explorer.view_goals, views_off) << "the budget ended no view goal";
+      EXPECT_LT(s.sim_time_s, t_off);
+    }
+  }
+}
+
+TEST(SimDoors, TheViewGoalBudgetIsChecked) {
+  duet::ExplorerSettings s;
+  s.view_min_gain_m2 = -1.0f;
+  EXPECT_THROW(duet::validate(s), duet::Error);
+  s.view_min_gain_m2 = 5.0f;
+  s.view_gain_window_s = 0.0f;
+  EXPECT_THROW(duet::validate(s), duet::Error);
+  s.view_gain_window_s = 600.0f;
+  EXPECT_NO_THROW(duet::validate(s));
+}

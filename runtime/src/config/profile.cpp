@@ -142,7 +142,7 @@ ExplorationProfile read_exploration(Reader& r, const YAML::Node& n, const Chassi
   // The inflation radius defaults to the chassis radius plus 2 cm when that exceeds 0.20 m.
   ex.inflation.robot_radius_m = std::max(ex.inflation.robot_radius_m, chassis.radius_m + 0.02f);
   std::vector<std::string_view> keys = {"rays_per_sensor", "cells",      "observation",  "inflation",     "path", "frontier",
-                                        "simulation",      "eps_r_bits", "use_simulation", "dwa"};
+                                        "simulation",      "eps_r_bits", "eps_r_unknown_only", "use_simulation", "dwa"};
   for (const std::string_view k : detail::exploration_goal_keys()) keys.push_back(k);  // the goal life cycle's (settings_yaml.cpp)
   MapReader m(r, n, "exploration", std::move(keys));  // the section's keys; the fields through their list
   detail::read_exploration_kernels(r, n, ex);

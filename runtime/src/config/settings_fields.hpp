@@ -147,6 +147,8 @@ void goal_fields(V& v, ExplorerSettings& s) {
   v("view_looks", s.view_looks);
   v("view_relook_after_s", s.view_relook_after_s);
   v("view_relook_dwell_s", s.view_relook_dwell_s);
+  v("view_min_gain_m2", s.view_min_gain_m2);
+  v("view_gain_window_s", s.view_gain_window_s);
   v("look_with_any_sensor", s.look_with_any_sensor);
   v("frontier_seen_radius_m", s.frontier_seen_radius_m);
   v("clear_footprint", s.clear_footprint);
@@ -401,6 +403,7 @@ void fields(V& v, ExplorationProfile& e) {
     w("seed", p.seed);
   });
   v("eps_r_bits", e.strategy.eps_r_bits);
+  v("eps_r_unknown_only", e.strategy.eps_r_unknown_only);
   v("use_simulation", e.strategy.use_simulation);
   v.section("dwa", [&](auto& w) {
     DwaSettings& d = e.dwa;

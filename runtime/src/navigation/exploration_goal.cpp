@@ -59,6 +59,7 @@ std::optional<GoalProposal> ExplorationGoal::propose(GoalQuery& q) {
   rec.t_s = q.now_s;
   rec.status = d.status;
   rec.reward_bits = d.reward_bits;
+  rec.unknown_reward_bits = d.simulation.unknown_reward_bits;
   rec.robot = q.robot;
   rec.goal = d.goal;
   rec.wall_time_s = dt;

@@ -66,6 +66,10 @@ void validate(const ExplorerSettings& s) {
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::frontier_seen_radius_m must be in [0, 5] m, got " + std::to_string(s.frontier_seen_radius_m));
   if (!(s.view_relook_dwell_s >= 0.0f && s.view_relook_dwell_s <= 600.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_relook_dwell_s must be in [0, 600] s, got " + std::to_string(s.view_relook_dwell_s));
+  if (!(s.view_min_gain_m2 >= 0.0f && s.view_min_gain_m2 <= 1e6f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_min_gain_m2 must be in [0, 1e6] m^2, got " + std::to_string(s.view_min_gain_m2));
+  if (!(s.view_gain_window_s > 0.0f && s.view_gain_window_s <= 1e5f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_gain_window_s must be in (0, 1e5] s, got " + std::to_string(s.view_gain_window_s));
   if (!(s.recent_obstacles_s >= 0.0f && s.recent_obstacles_s <= 3600.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::recent_obstacles_s must be in [0, 3600] s, got " + std::to_string(s.recent_obstacles_s));
   if (!(s.recent_obstacle_range_m > 0.0f && s.recent_obstacle_range_m <= 10.0f))

@@ -440,6 +440,8 @@ void Navigator::finish(const Pose2& robot, double now_s) {
     left_ = find_unexplored(inflated(), Eigen::Vector2f(robot.x, robot.y), frontier_xy_, failures_, looked, us);
     if (!left_.empty()) stop_detail_ += " - " + describe(left_);
   }
+  for (const auto& st : strategies_)
+    if (const std::string note = st->stop_note(); !note.empty()) stop_detail_ += "; " + note;
   if (settings_.on_done == OnDone::kPatrol && !trail_->points().empty()) {
     start_patrol(robot, now_s);
     return;

@@ -23,9 +23,17 @@ struct ExplorationSettings {
   FrontierSettings frontier;
   /// eps_R of Fig. 6 [bits]: the simulated goal is taken only if its expected entropy reduction
   /// exceeds this. One first observation of an unknown cell removes 0.03 bits (miss, l = -0.4)
-  /// to 0.12 bits (hit, l = 0.85), so 1 bit is about 30 newly seen cells (0.075 m^2 at 0.05 m):
-  /// less than that is not worth the trip and the frontier search takes over. [0, inf)
+  /// to 0.12 bits (hit, l = 0.85), so 1 bit is about 30 newly seen cells (0.075 m^2 at 0.05 m);
+  /// but R_g also counts cells seen again (a free cell at l = -0.4 seen once more: 0.08 bits), so
+  /// on a map of cells seen only a few times R_g is tens to hundreds of bits wherever the robot
+  /// goes (eps_r_unknown_only below). [0, inf)
   float eps_r_bits = 1.0f;
+  /// true: the test R_g > eps_R counts only the part of R_g from cells whose state is unknown
+  /// (PartialSimResult::unknown_reward_bits), so a goal that would only confirm known cells -
+  /// a cell seen free once is at l = -0.4, and seeing it again removes 0.08 bits, more than a
+  /// first look at an unknown cell - does not keep the robot in rooms it has seen while the
+  /// frontier search would lead on. false: the paper's test on the whole R_g.
+  bool eps_r_unknown_only = false;
   /// false: frontier search only (the explore_lite-like baseline the benchmarks compare against).
   bool use_simulation = true;
   /// true: the frontier search runs concurrently with the simulation (a TBB task) and its result

@@ -109,6 +109,9 @@ struct PartialSimResult {
   bool found = false;          ///< a valid particle with a positive reward exists
   Pose2 goal;                  ///< X_g (the robot's pose when !found)
   float reward_bits = 0.0f;    ///< R_g [bits]
+  /// The part of R_g from cells whose state is unknown (never observed, or between the
+  /// thresholds): what going there is expected to add to the map rather than to confirm [bits].
+  float unknown_reward_bits = 0.0f;
   int best_particle = -1;      ///< n_m
   int valid_particles = 0;     ///< non-rejected rollouts in the last iteration
   int resamples = 0;           ///< how many iterations resampled (line 24)

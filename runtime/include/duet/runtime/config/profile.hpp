@@ -130,7 +130,7 @@ struct MappingSettings {
 ///   path:        {allow_diagonal, clearance_weight, clearance_decay_m, goal_tolerance_m}
 ///   frontier:    {min_cluster_cells, min_goal_distance_m, blacklist_radius_m}
 ///   simulation:  PartialSimSettings' fields (iterations, particles, phi_a, phi_b, stages, ...)
-///   eps_r_bits, use_simulation
+///   eps_r_bits, eps_r_unknown_only, use_simulation
 ///   dwa:         DwaSettings' fields except robot_radius_m, plus the ChassisLimits fields
 ///                {max_v_mps, min_v_mps, max_omega_rps, max_accel_mps2, max_alpha_rps2}
 ///                (max_v_mps and max_omega_rps must not exceed the chassis' maxima)

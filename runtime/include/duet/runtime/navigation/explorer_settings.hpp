@@ -81,6 +81,14 @@ struct ExplorerSettings {
   /// from max_logodds 3.5 to below the free threshold at -0.4 a miss). A place that does not
   /// change costs 3 s.
   float view_relook_dwell_s = 30.0f;
+  /// The view goals' budget: while every frontier left is unreachable (the robot only looks at
+  /// them from view goals), the looking ends when the map's known area grew by less than
+  /// view_min_gain_m2 over the last view_gain_window_s; the explorer then stops, and its stop
+  /// reason says so. Without it a large building's view phase ran on for 1-1.4 h adding ~1 % of
+  /// the area (orebro, fhw, Willow: each view at a far gap shows a few cells, and new ragged
+  /// frontier cells). [m^2], [0, 1e6]; 0 = off (look until no place is left to look at).
+  float view_min_gain_m2 = 0.0f;
+  float view_gain_window_s = 600.0f;  ///< [s], (0, 1e5]
   /// true: a frontier goal's heading points whichever sensor needs the least turn from the
   /// heading the robot arrives with (heading_to_look(), observation.hpp): with the paper's front
   /// and right sensors, a frontier on the robot's right is looked at without turning to it.
@@ -197,6 +205,7 @@ struct DecisionRecord {
   double t_s = 0.0;                 ///< runtime clock
   ExplorationStatus status = ExplorationStatus::kNoFrontier;
   float reward_bits = 0.0f;         ///< R_g of the partial map simulation
+  float unknown_reward_bits = 0.0f; ///< R_g's part from unknown cells (PartialSimResult)
   Pose2 robot;                      ///< where the robot was
   Pose2 goal;                       ///< the goal (if any)
   bool planned = false;             ///< a path to the goal was found

@@ -26,6 +26,7 @@
 #include <duet/runtime/navigation/explorer_settings.hpp>
 
 #include <functional>
+#include <string>
 #include <memory>
 #include <optional>
 #include <span>
@@ -94,6 +95,8 @@ class GoalStrategy {
   /// Frontier cells this strategy looked at and will not look for again (map frame), for the
   /// report of what was left (unexplored.hpp).
   [[nodiscard]] virtual std::vector<Eigen::Vector2f> looked_at() const { return {}; }
+  /// Why this strategy has stopped proposing goals, for the stop reason ("" = it has not).
+  [[nodiscard]] virtual std::string stop_note() const { return {}; }
   /// While its goal is active: the grid to plan on instead of the navigator's (nullptr: that one).
   [[nodiscard]] virtual const InflatedGrid* planning_grid() const { return nullptr; }
   /// While its goal is active: the dynamic window's robot radius, if it differs [m].
