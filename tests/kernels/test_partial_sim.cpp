@@ -10,6 +10,7 @@
 #include <cmath>
 #include <random>
 #include <set>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -142,6 +143,32 @@ TEST(PartialSim, SameResultWithOneAndTwoThreads) {
   EXPECT_NE(r4.weights, r1.weights);
 }
 
+// The reference for the hand computations: f(ix, iy) for every cell each ray of the sensors'
+// fans at pose x crosses, ray by ray (walk_cells, the reference DDA; cells outside the grid too).
+template <class F>
+void walk_fans(const TestGrid& g, const Pose2& x, std::span<const SensorSector> sensors, F f) {
+  for (const SensorSector& sec : sensors) {
+    std::vector<Eigen::Vector2f> o(static_cast<std::size_t>(sec.rays)), d(static_cast<std::size_t>(sec.rays));
+    sector_rays(x, sec, o, d);
+    for (std::size_t i = 0; i < o.size(); ++i)
+      walk_cells(g.view(), o[i], d[i], sec.min_range_m, sec.max_range_m, [&](int ix, int iy, float, float) {
+        f(ix, iy);
+        return true;
+      });
+  }
+}
+
+// n 2 x 2 islands at random places of g (fixed seed); island i gets value(i).
+template <class V>
+void scatter_islands(TestGrid& g, unsigned seed, int n, V value) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> pos(0, 398);
+  for (int i = 0; i < n; ++i) {
+    const int x = pos(rng), y = pos(rng);
+    g.fill(x, y, x + 2, y + 2, value(i));
+  }
+}
+
 // One iteration, one particle, one observation sample, one 1 s stage straight ahead at 1 m/s,
 // no l_ISM noise: the settings of the hand computations below.
 PartialSimSettings one_straight_sample() {
@@ -173,15 +200,7 @@ TEST(PartialSim, RewardMatchesHandComputationOnKnownFreeCells) {
   EXPECT_NEAR(r.goal.x, x1.x, 1e-5f);
   EXPECT_NEAR(r.goal.y, x1.y, 1e-5f);
   std::set<std::pair<int, int>> cells;
-  for (const SensorSector& sec : sensors) {
-    std::vector<Eigen::Vector2f> o(static_cast<std::size_t>(sec.rays)), d(static_cast<std::size_t>(sec.rays));
-    sector_rays(x1, sec, o, d);
-    for (std::size_t i = 0; i < o.size(); ++i)
-      walk_cells(g.view(), o[i], d[i], sec.min_range_m, sec.max_range_m, [&](int ix, int iy, float, float) {
-        cells.insert({ix, iy});
-        return true;
-      });
-  }
+  walk_fans(g, x1, sensors, [&](int ix, int iy) { cells.insert({ix, iy}); });
   const double per_cell = static_cast<double>(entropy_bits(-0.4f)) - static_cast<double>(entropy_bits(-0.8f));
   EXPECT_NEAR(r.reward_bits, per_cell * static_cast<double>(cells.size()), 1e-3 * per_cell * static_cast<double>(cells.size()));
   EXPECT_EQ(r.unknown_reward_bits, 0.0f) << "every cell is known free: nothing new to see";
@@ -195,12 +214,7 @@ TEST(PartialSim, RewardMatchesHandComputationOnKnownFreeCells) {
 TEST(PartialSim, UnknownRewardCountsOnlyTheCellsOfUnknownState) {
   TestGrid g(400, 400);
   g.fill(0, 0, 400, 400, kFreeL);
-  std::mt19937 rng(11);
-  std::uniform_int_distribution<int> pos(0, 398);
-  for (int i = 0; i < 800; ++i) {
-    const int x = pos(rng), y = pos(rng);
-    g.fill(x, y, x + 2, y + 2, i % 2 == 0 ? -0.4f : kUnknown);
-  }
+  scatter_islands(g, 11, 800, [](int i) { return i % 2 == 0 ? -0.4f : kUnknown; });
   const Pose2 robot{10.02f, 9.97f, 0.7f};
   for (int y = 0; y < 400; ++y)
     for (int x = 0; x < 400; ++x)
@@ -214,18 +228,12 @@ TEST(PartialSim, UnknownRewardCountsOnlyTheCellsOfUnknownState) {
   ASSERT_TRUE(r.found);
   const Pose2 x1 = motion_step(robot, Twist{1.0f, 0.0f}, 1.0f);
   std::set<std::pair<int, int>> known, unknown;
-  for (const SensorSector& sec : sensors) {
-    std::vector<Eigen::Vector2f> o(static_cast<std::size_t>(sec.rays)), d(static_cast<std::size_t>(sec.rays));
-    sector_rays(x1, sec, o, d);
-    for (std::size_t i = 0; i < o.size(); ++i)
-      walk_cells(g.view(), o[i], d[i], sec.min_range_m, sec.max_range_m, [&](int ix, int iy, float, float) {
-        if (!g.view().in_bounds(ix, iy)) return true;
-        const float l = g.at(ix, iy);
-        if (std::isnan(l)) unknown.insert({ix, iy});
-        else if (l == -0.4f) known.insert({ix, iy});
-        return true;
-      });
-  }
+  walk_fans(g, x1, sensors, [&](int ix, int iy) {
+    if (!g.view().in_bounds(ix, iy)) return;
+    const float l = g.at(ix, iy);
+    if (std::isnan(l)) unknown.insert({ix, iy});
+    else if (l == -0.4f) known.insert({ix, iy});
+  });
   ASSERT_GT(known.size(), 10u) << "the fans must cross both kinds of island for this test to mean anything";
   ASSERT_GT(unknown.size(), 10u);
   const double per_known = static_cast<double>(entropy_bits(-0.4f)) - static_cast<double>(entropy_bits(-0.8f));
@@ -245,12 +253,7 @@ TEST(PartialSim, JumpsOverClampedFreeSpaceMissNoCell) {
   for (const float theta : {0.7f, 0.0f, -1.1f, 2.6f}) {  // diagonal and axis-parallel fans
     TestGrid g(400, 400);
     g.fill(0, 0, 400, 400, kFreeL);
-    std::mt19937 rng(5);
-    std::uniform_int_distribution<int> pos(0, 398);
-    for (int i = 0; i < 600; ++i) {
-      const int x = pos(rng), y = pos(rng);
-      g.fill(x, y, x + 2, y + 2, -0.4f);
-    }
+    scatter_islands(g, 5, 600, [](int) { return -0.4f; });
     Prepared p(g);
     const PartialSimSettings s = one_straight_sample();
     const Pose2 robot{10.02f, 9.97f, theta};
@@ -260,18 +263,12 @@ TEST(PartialSim, JumpsOverClampedFreeSpaceMissNoCell) {
     const Pose2 x1 = motion_step(robot, Twist{1.0f, 0.0f}, 1.0f);
     std::set<std::pair<int, int>> cells;  // distinct island cells crossed (the reward)
     std::int64_t crossings = 0;           // island cells crossed, ray by ray (the walks' visits)
-    for (const SensorSector& sec : sensors) {
-      std::vector<Eigen::Vector2f> o(static_cast<std::size_t>(sec.rays)), d(static_cast<std::size_t>(sec.rays));
-      sector_rays(x1, sec, o, d);
-      for (std::size_t i = 0; i < o.size(); ++i)
-        walk_cells(g.view(), o[i], d[i], sec.min_range_m, sec.max_range_m, [&](int ix, int iy, float, float) {
-          if (g.view().in_bounds(ix, iy) && g.at(ix, iy) == -0.4f) {
-            cells.insert({ix, iy});
-            ++crossings;
-          }
-          return true;
-        });
-    }
+    walk_fans(g, x1, sensors, [&](int ix, int iy) {
+      if (g.view().in_bounds(ix, iy) && g.at(ix, iy) == -0.4f) {
+        cells.insert({ix, iy});
+        ++crossings;
+      }
+    });
     ASSERT_GT(cells.size(), 20u) << "the fans must cross islands for this test to mean anything";
     ASSERT_TRUE(r.found);
     EXPECT_EQ(r.cells_visited, crossings) << "theta " << theta;

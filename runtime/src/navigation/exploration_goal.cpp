@@ -40,11 +40,9 @@ std::optional<GoalProposal> ExplorationGoal::propose(GoalQuery& q) {
     if (ref_t_ < 0.0 || grown() || d.frontier.reached_cells < ref_cells_) {
       ref_t_ = q.now_s;
       ref_cells_ = d.frontier.reached_cells;
-      stagnant_ = false;
-    } else if (q.now_s - ref_t_ >= static_cast<double>(stagnation_s_)) {
-      stagnant_ = true;
     }
-    if (stagnant_ && d.status == ExplorationStatus::kSimulatedGoal && d.frontier.status == FrontierStatus::kFound) {
+    const bool stagnant = q.now_s - ref_t_ >= static_cast<double>(stagnation_s_);
+    if (stagnant && d.status == ExplorationStatus::kSimulatedGoal && d.frontier.status == FrontierStatus::kFound) {
       d.status = ExplorationStatus::kFrontierGoal;
       d.goal = frontier_goal_pose(d.frontier, q.robot);
       ++q.stats.stagnation_frontier_goals;

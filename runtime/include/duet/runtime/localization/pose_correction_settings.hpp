@@ -48,9 +48,9 @@ struct PoseCorrectionSettings {
   /// (an aged reference lacks what was just seen: a wide window finds false fits in it).
   int relocalize_after = 3;
   float relocalize_window_m = 1.0f;     ///< +- this in x and y [m], (0, 5]
-  /// +- this in heading [deg], (0, 45]. 10: a push or a slip turns the robot by a few degrees;
-  /// wider, a map bent by drift in a long corridor offers false fits turned by more (fhw seed 1
-  /// at 20: a re-match turned the pose by 16 deg the wrong way, pose error 9.5 m, 2 collisions).
+  /// +- this in heading [deg], (0, 45]. A push or a slip turns the robot by a few degrees; a
+  /// wider window lets a map bent by drift (a long corridor) offer false fits turned by more
+  /// (bench/RESULTS.md, stop 45).
   float relocalize_window_deg = 10.0f;
   float relocalize_step_m = 0.1f;       ///< lattice step [m] (then refined to a quarter), (0, 1]
   float relocalize_step_deg = 1.0f;     ///< [deg], (0, 10]
@@ -62,10 +62,9 @@ struct PoseCorrectionSettings {
   /// check (the lab robot carried 0.6 m sideways: 14-15 %, test_pose_corrector_hold.cpp). A scan of space not seen yet explains nothing at the prediction either, but its
   /// points fall on unknown cells - not a sign of being lost, and a wide window then finds a
   /// false fit of the new walls on old ones (freiburg-101: 1.3 m / 20.7 deg at 140 s, issue 23).
-  /// Vision's request to re-match (VisualLocalization) is not subject to it. 0.1 since stop 45
-  /// (0.05 before): edmonton seed 1's re-match at 3278 s had 7 % and took a pose 1.45 m / 9 deg
-  /// the wrong way (pose error 0.24 -> 1.6 m, later 7 m, 4 collisions); the right ones measured
-  /// had 31-98 % (one sample below 0.1, a guard, not a fit).
+  /// Vision's request to re-match (VisualLocalization) is not subject to it. 0.1 is a guard: a
+  /// scan mostly of new space contradicts the map on few points, and such a scan was re-matched
+  /// the wrong way (bench/RESULTS.md, stop 45).
   float relocalize_min_conflict = 0.1f;
   /// ... and only when it is not ambiguous: its score must beat, by this, the best score of any
   /// other fit in the window - a pose farther than relocalize_distinct_m from it (the wide

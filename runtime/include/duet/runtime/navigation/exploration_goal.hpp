@@ -21,7 +21,6 @@ class ExplorationGoal final : public GoalStrategy {
   ExplorationSettings strategy_;
   bool stop_when_no_frontier_;
   float stagnation_s_, stagnation_min_m2_;
-  bool stagnant_ = false;
   double ref_t_ = -1.0;           ///< when the reachable area last grew by stagnation_min_m2
   std::size_t ref_cells_ = 0;     ///< the reachable cells then
   ExplorationWorkspace ws_;

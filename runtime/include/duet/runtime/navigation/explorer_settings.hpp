@@ -38,10 +38,10 @@ struct ExplorerSettings {
   bool stop_when_no_frontier = true;
   /// Stagnation: when the reachable area the frontier search settles has grown by less than
   /// stagnation_min_m2 over the last stagnation_s seconds of simulated goals, the nearest
-  /// frontier replaces Procedure 1's goal until it has grown by that much. The reward counts the
-  /// re-observation of known cells too, so in a room already seen it stays above eps_R and the
-  /// robot can wander there (belgioioso seed 3: 750 s at 45 % with goals of 14-37 bits while the
-  /// nearest frontier lay 16 m away). [s], [0, 3600]; 0 = off (the paper's rule only).
+  /// frontier replaces Procedure 1's goal until it has grown by that much: with the paper's eps_R
+  /// test (which counts cells seen again) the reward stays above eps_R in a room already seen.
+  /// exploration.eps_r_unknown_only treats the cause; this is the older symptom rule.
+  /// [s], [0, 3600]; 0 = off.
   float stagnation_s = 0.0f;
   float stagnation_min_m2 = 2.0f;  ///< [m^2], (0, 1000]
   /// How far a goal may be moved off cells next to unknown space to a cell the dynamic window
@@ -84,9 +84,9 @@ struct ExplorerSettings {
   /// The view goals' budget: while every frontier left is unreachable (the robot only looks at
   /// them from view goals), the looking ends when the map's known area grew by less than
   /// view_min_gain_m2 over the last view_gain_window_s; the explorer then stops, and its stop
-  /// reason says so. Without it a large building's view phase ran on for 1-1.4 h adding ~1 % of
-  /// the area (orebro, fhw, Willow: each view at a far gap shows a few cells, and new ragged
-  /// frontier cells). [m^2], [0, 1e6]; 0 = off (look until no place is left to look at).
+  /// reason says so: each view at a far gap shows a few cells and leaves new ragged frontier
+  /// cells, so without it looking can go on for an hour adding little.
+  /// [m^2], [0, 1e6]; 0 = off (look until no place is left to look at).
   float view_min_gain_m2 = 0.0f;
   float view_gain_window_s = 600.0f;  ///< [s], (0, 1e5]
   /// true: a frontier goal's heading points whichever sensor needs the least turn from the
