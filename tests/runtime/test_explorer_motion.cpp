@@ -253,16 +253,18 @@ TEST(Explorer, CorneredRobotEscapesTowardsMoreClearance) {
   const duet::OccupancyGrid g = willow_corner();
   const Eigen::Vector2f start = g.cell_center(20, 24);
   float min_clearance = 0.0f;
-  {  // Without the escape (the default, 0 = off): 60 s on the spot.
-    duet::Explorer e(p);
+  {  // Without the escape (0 = off): 60 s on the spot.
+    duet::ExplorerSettings off;
+    off.cornered_after_s = 0.0f;
+    duet::Explorer e(p, off);
     const duet::Pose2 end = drive_from_the_corner(e, g, 60.0, &min_clearance);
     EXPECT_LT((Eigen::Vector2f(end.x, end.y) - start).norm(), 0.1f);
     EXPECT_EQ(e.stats().goals_reached, 0);
     EXPECT_EQ(e.stats().cornered_escapes, 0);
   }
-  // With it (8 s): out after the first 8 s, then on to the frontier.
+  // With it (the default, 8 s): out after the first 8 s, then on to the frontier.
   duet::ExplorerSettings s;
-  s.cornered_after_s = 8.0f;
+  EXPECT_EQ(s.cornered_after_s, 8.0f);
   duet::Explorer e(p, s);
   const duet::Pose2 end = drive_from_the_corner(e, g, 60.0, &min_clearance);
   EXPECT_GT(e.stats().cornered_escapes, 0);

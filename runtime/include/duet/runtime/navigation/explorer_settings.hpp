@@ -130,8 +130,11 @@ struct ExplorerSettings {
   float stall_timeout_s = 1.0f;
   float contact_radius_m = 0.10f;     ///< radius of a contact obstacle [m], (0, 1]
   /// Cornered: the dynamic window kept the robot within 0.1 m of one spot this long [s],
-  /// [0, inf); 0 = off. It then creeps towards more clearance until out of that spot.
-  float cornered_after_s = 0.0f;
+  /// [0, inf); 0 = off. It then creeps towards more clearance until out of that spot. At the
+  /// edge of the band its radius fits in (a door jamb, a bump of the band), spinning, every
+  /// forward motion the window can reach from the spin leaves the band: without this the robot
+  /// turns on until the goal's time limit (a full turn at the mapping limit takes 8 s).
+  float cornered_after_s = 8.0f;
   /// Slow zone (nav2's speed filter): the top speed falls with the clearance on the planning
   /// grid, linearly from the profile's max_v_mps at slow_clearance_m to slow_speed_mps at the
   /// window's margin, so the sensors' new hits reach the map before the robot does.
