@@ -20,7 +20,8 @@ and clouds, and exceptions carrying the C error message.
 
 Every object keeps its device alive; release() (or the garbage collector, or a `with` block)
 frees it. Errors: DuetError(code, message), code one of duet.ERRORS ("INVALID_ARGUMENT", ...).
-Units, frames and thread safety are those of duet.h / duet_runtime.h / duet_sim.h.
+Units, frames and thread safety are those of duet.h / duet_cloud.h / duet_grid.h / duet_planner.h /
+duet_runtime.h / duet_sim.h.
 """
 import ctypes
 

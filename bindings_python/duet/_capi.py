@@ -1,4 +1,5 @@
-"""ctypes declarations of libduet.so's C API (duet.h, duet_runtime.h, duet_sim.h).
+"""ctypes declarations of libduet.so's C API (duet.h, duet_cloud.h, duet_grid.h, duet_planner.h,
+duet_runtime.h, duet_sim.h).
 
 The structures mirror the C headers field by field (C layout, native alignment); the
 prototypes give every function its argument and return types, so a wrong call is a Python

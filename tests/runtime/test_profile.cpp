@@ -439,7 +439,7 @@ TEST(ProfileErrors, ExplorationKeysAreCheckedLikeTheRest) {
     expect_contains(e.what(), "exploration.simulation.gamma");
   }
   {
-    const duet::Error e = load_error(dir, dual_with("  eps_r_bits: 1.0 ", "  eps_r_bits: -1.0 "));
+    const duet::Error e = load_error(dir, dual_with("  eps_r_bits: 12.0\n", "  eps_r_bits: -1.0\n"));
     expect_contains(e.what(), "eps_r_bits");
   }
 }
