@@ -41,7 +41,6 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
   j["decisions"] = {{"count", e.decisions},
                     {"simulated_goals", e.simulated_goals},
                     {"frontier_fallback_goals", e.frontier_goals},
-                    {"stagnation_frontier_goals", e.stagnation_frontier_goals},
                     {"mean_time_ms", e.decisions ? 1e3 * e.decision_time_sum_s / e.decisions : 0.0},
                     {"max_time_ms", 1e3 * e.decision_time_max_s}};
   j["goals"] = {{"reached", e.goals_reached},

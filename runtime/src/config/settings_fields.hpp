@@ -134,8 +134,6 @@ void goal_fields(V& v, ExplorerSettings& s) {
   v.choice("on_done", s.on_done, kOnDoneNames);
   v("patrol_spacing_m", s.patrol_spacing_m);
   v("stop_when_no_frontier", s.stop_when_no_frontier);
-  v("stagnation_s", s.stagnation_s);
-  v("stagnation_min_m2", s.stagnation_min_m2);
   v("goal_standoff_search_m", s.goal_standoff_search_m);
   v("squeeze_margin_m", s.squeeze_margin_m);
   v("squeeze_anywhere", s.squeeze_anywhere);

@@ -10,9 +10,7 @@ namespace duet {
 ExplorationGoal::ExplorationGoal(const Profile& profile, const ExplorerSettings& settings)
     : GoalStrategy(settings.blacklist_ttl_s),
       strategy_(profile.exploration.strategy),
-      stop_when_no_frontier_(settings.stop_when_no_frontier),
-      stagnation_s_(settings.stagnation_s),
-      stagnation_min_m2_(settings.stagnation_min_m2) {}
+      stop_when_no_frontier_(settings.stop_when_no_frontier) {}
 
 std::optional<GoalProposal> ExplorationGoal::propose(GoalQuery& q) {
   ExplorationSettings s = strategy_;
@@ -30,23 +28,6 @@ std::optional<GoalProposal> ExplorationGoal::propose(GoalQuery& q) {
     if (d.frontier.status == FrontierStatus::kNoFrontier) d.status = ExplorationStatus::kNoFrontier;
     else if (d.frontier.status == FrontierStatus::kAllUnreachable) d.status = ExplorationStatus::kAllUnreachable;
     else if (d.frontier.status == FrontierStatus::kAllBlacklisted) d.status = ExplorationStatus::kAllBlacklisted;
-  }
-  if (stagnation_s_ > 0.0f && d.frontier_searched) {
-    // The reachable area (the cells the frontier search settled) against the reference.
-    const float cell_m2 = q.planning.resolution_m * q.planning.resolution_m;
-    const auto grown = [&] {
-      return static_cast<float>(d.frontier.reached_cells) > static_cast<float>(ref_cells_) + stagnation_min_m2_ / cell_m2;
-    };
-    if (ref_t_ < 0.0 || grown() || d.frontier.reached_cells < ref_cells_) {
-      ref_t_ = q.now_s;
-      ref_cells_ = d.frontier.reached_cells;
-    }
-    const bool stagnant = q.now_s - ref_t_ >= static_cast<double>(stagnation_s_);
-    if (stagnant && d.status == ExplorationStatus::kSimulatedGoal && d.frontier.status == FrontierStatus::kFound) {
-      d.status = ExplorationStatus::kFrontierGoal;
-      d.goal = frontier_goal_pose(d.frontier, q.robot);
-      ++q.stats.stagnation_frontier_goals;
-    }
   }
   const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ++q.stats.decisions;

@@ -89,9 +89,6 @@ void validate(const ExplorerSettings& s) {
   };
   in(s.few_features_speed_mps, 0.0f, 100.0f, "few_features_speed_mps", "m/s (0 = no cap)");
   in(s.seek_after_s, 0.0f, 3600.0f, "seek_after_s", "s (0 = never)");
-  in(s.stagnation_s, 0.0f, 3600.0f, "stagnation_s", "s (0 = off)");
-  if (!(s.stagnation_min_m2 > 0.0f && s.stagnation_min_m2 <= 1000.0f))
-    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::stagnation_min_m2 must be in (0, 1000] m^2, got " + std::to_string(s.stagnation_min_m2));
   in(s.seek_cooldown_s, 0.0f, 3600.0f, "seek_cooldown_s", "s");
   in(s.seek_min_turn_rad, 0.0f, 3.1416f, "seek_min_turn_rad", "rad");
   in(s.seek_range_m, 0.1f, 20.0f, "seek_range_m", "m");

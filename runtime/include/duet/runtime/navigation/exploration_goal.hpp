@@ -3,9 +3,7 @@
 /// The kernel's decision (exploration.hpp, decide_goal()): Procedure 1's simulated goal and,
 /// below eps_R, the frontier search - as ExplorationSettings selects (the paper's strategy, the
 /// nearest frontier, explore_lite's cost). With stop_when_no_frontier a simulated goal is not
-/// taken once the frontier search finds no frontier left (the map is complete); with
-/// ExplorerSettings::stagnation_s the nearest frontier replaces it while the reachable area has
-/// stopped growing. Every call is one decision: a fresh random stream for Procedure 1, a record
+/// taken once the frontier search finds no frontier left (the map is complete). Every call is one decision: a fresh random stream for Procedure 1, a record
 /// in the run's log.
 #include <duet/runtime/navigation/goal_strategy.hpp>
 
@@ -20,9 +18,6 @@ class ExplorationGoal final : public GoalStrategy {
  private:
   ExplorationSettings strategy_;
   bool stop_when_no_frontier_;
-  float stagnation_s_, stagnation_min_m2_;
-  double ref_t_ = -1.0;           ///< when the reachable area last grew by stagnation_min_m2
-  std::size_t ref_cells_ = 0;     ///< the reachable cells then
   ExplorationWorkspace ws_;
   std::uint64_t decision_seed_ = 0;
 };

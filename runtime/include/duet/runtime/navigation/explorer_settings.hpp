@@ -36,14 +36,6 @@ struct ExplorerSettings {
   /// below the log-odds clamp keep gaining from re-observation, so R_g <= eps_R alone never
   /// ends a run. Costs one frontier search per simulated goal. false: the paper's rule only.
   bool stop_when_no_frontier = true;
-  /// Stagnation: when the reachable area the frontier search settles has grown by less than
-  /// stagnation_min_m2 over the last stagnation_s seconds of simulated goals, the nearest
-  /// frontier replaces Procedure 1's goal until it has grown by that much: with the paper's eps_R
-  /// test (which counts cells seen again) the reward stays above eps_R in a room already seen.
-  /// exploration.eps_r_unknown_only treats the cause; this is the older symptom rule.
-  /// [s], [0, 3600]; 0 = off.
-  float stagnation_s = 0.0f;
-  float stagnation_min_m2 = 2.0f;  ///< [m^2], (0, 1000]
   /// How far a goal may be moved off cells next to unknown space to a cell the dynamic window
   /// can stand on [m], [0, 5]; 0 = never (such a goal is abandoned).
   float goal_standoff_search_m = 0.75f;
@@ -171,7 +163,6 @@ struct ExplorerStats {
   int decisions = 0;              ///< decide_goal() calls
   int simulated_goals = 0;        ///< goals from the partial map simulation
   int frontier_goals = 0;         ///< goals from the frontier fallback (R_g <= eps_R)
-  int stagnation_frontier_goals = 0;  ///< simulated goals replaced by the nearest frontier (stagnation_s)
   int goals_reached = 0;
   int goals_abandoned_timeout = 0;
   int goals_abandoned_no_path = 0;
