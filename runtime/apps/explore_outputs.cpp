@@ -52,6 +52,8 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                 {"dwa_local_fallbacks", e.local_fallbacks},
                 {"escapes", e.escapes},
                 {"cornered_escapes", e.cornered_escapes},
+                {"blocked_recoveries", e.blocked_recoveries},
+                {"blocked_escapes", e.blocked_escapes},
                 {"slowed_periods", e.slowed},
                 {"few_feature_periods", e.few_feature_periods},
                 {"feature_seeks", e.feature_seeks},
@@ -84,6 +86,7 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                {"relocalizations_held", s.relocalizations_held},
                {"relocalizations_new_space", s.relocalizations_new_space},
                {"relocalizations_ambiguous", s.relocalizations_ambiguous},
+               {"relocalizations_in_obstacle", s.relocalizations_in_obstacle},
                {"relocalizations_asked", s.relocalizations_asked},
                {"scan_match_time_s", s.scan_match_time_s}};
   if (s.visual_odometry)

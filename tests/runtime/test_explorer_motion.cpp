@@ -1,7 +1,9 @@
 // Explorer (runtime/explorer.hpp) in motion on hand-made grids: recent obstacles stop the dynamic
 // window where the map sees free, the slow zone near obstacles, a cornered robot escapes, view
 // goals look at frontiers the robot cannot reach (and an abandoned one is not tried again), a
-// loop closure's frame shift moves the goal, path and recent obstacles, and the command never
+// loop closure's frame shift moves the goal, path and recent obstacles, view goals rank a long
+// frontier before a near pocket, a robot found blocked
+// climbs out instead of giving up, and the command never
 // exceeds the chassis. Goals and their standing room: test_explorer.cpp.
 #include <duet/kernels/error.hpp>
 #include <duet/runtime/navigation/explorer.hpp>
@@ -14,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -273,6 +276,66 @@ TEST(Explorer, CorneredRobotEscapesTowardsMoreClearance) {
   EXPECT_GT(min_clearance, p.chassis.radius_m);  // never touched anything on the way
 }
 
+// A room 2 m x 3 m (the unknown beyond its north side: a frontier), with a niche 0.4 m wide and
+// 0.6 m deep in its south wall. The robot stands at the back of the niche: its body fits (0.2 m
+// and more to each side wall for a 0.177 m radius) but no cell within the planning radius
+// (0.29 m) is traversable, nor on the relaxed grid (0.237 m) - the frontier search finds it
+// blocked, as after a pose estimate moved next to a wall.
+duet::OccupancyGrid room_with_a_niche() {
+  duet::OccupancyGrid g(kRes, Eigen::Vector2f(0.0f, 0.0f), 40, 100);
+  for (int y = 0; y < g.height(); ++y)
+    for (int x = 0; x < g.width(); ++x)
+      g.logodds()[g.index(x, y)] = y >= 72 ? std::numeric_limits<float>::quiet_NaN() : y < 12 && (x <= 10 || x >= 19) ? 3.5f : -2.0f;
+  for (int x = 11; x < 19; ++x) g.logodds()[g.index(x, 0)] = 3.5f;  // the niche's back wall
+  return g;
+}
+
+TEST(Explorer, BlockedRobotClimbsOutInsteadOfGivingUp) {
+  const duet::Profile p = frontier_only_profile();
+  const duet::OccupancyGrid g = room_with_a_niche();
+  const duet::Pose2 start{15.0f * kRes, 6.0f * kRes, 0.0f};
+  const auto run = [&](const duet::ExplorerSettings& s, double seconds, float* min_clearance) {
+    auto e = std::make_unique<duet::Explorer>(p, s);
+    duet::Pose2 robot = start;
+    duet::Twist current;
+    *min_clearance = std::numeric_limits<float>::infinity();
+    double t = 0.0;
+    for (int k = 0; t < seconds && e->state() != duet::ExplorerState::kDone; ++k) {
+      perfect_step(*e, g, robot, current, k, t);
+      t += 0.05;
+      // Distance from the body's centre to the nearest wall cell (the map's own obstacles).
+      for (int y = 0; y < g.height(); ++y)
+        for (int x = 0; x < g.width(); ++x)
+          if (g.logodds()[g.index(x, y)] > 1.0f)
+            *min_clearance = std::min(*min_clearance, (g.cell_center(x, y) - Eigen::Vector2f(robot.x, robot.y)).norm());
+    }
+    return std::make_pair(std::move(e), robot);
+  };
+  float min_clearance = 0.0f;
+  {  // Off: the run ends at once, blocked, where it started.
+    duet::ExplorerSettings off;
+    off.blocked_recovery_s = 0.0f;
+    auto [e, end] = run(off, 30.0, &min_clearance);
+    EXPECT_EQ(e->state(), duet::ExplorerState::kDone);
+    EXPECT_EQ(e->stop_status(), duet::ExplorationStatus::kRobotBlocked);
+    EXPECT_NE(e->stop_detail().find("blocked"), std::string::npos) << e->stop_detail();
+    EXPECT_LT(std::hypot(end.x - start.x, end.y - start.y), 0.05f);
+    EXPECT_EQ(e->stats().blocked_recoveries, 0);
+    EXPECT_EQ(e->stats().blocked_escapes, 0);
+  }
+  // The default (30 s): out of the niche, then on to the frontier, never touching a wall.
+  duet::ExplorerSettings s;
+  EXPECT_EQ(s.blocked_recovery_s, 30.0f);
+  auto [e, end] = run(s, 60.0, &min_clearance);
+  EXPECT_EQ(e->stats().blocked_recoveries, 1);
+  EXPECT_GT(e->stats().blocked_escapes, 0);
+  EXPECT_GE(e->stats().frontier_goals, 1);
+  EXPECT_GE(e->stats().goals_reached, 1);
+  EXPECT_NE(e->stop_status(), duet::ExplorationStatus::kRobotBlocked) << e->stop_detail();
+  EXPECT_GT(end.y, 1.0f);  // out of the niche (0.6 m deep) and into the room
+  EXPECT_GT(min_clearance, p.chassis.radius_m);
+}
+
 // A room whose east wall (x = 2 m) has a one-cell gap; through it the sensors saw a one-cell-wide
 // line of free cells 1.2 m long (a room beyond, seen through a crack), unknown all around it: a
 // frontier the robot can never stand on. View goals: the robot goes to a cell of the room with a
@@ -360,6 +423,48 @@ TEST(Explorer, ViewGoalsLookAtFrontiersTheRobotCannotReach) {
   EXPECT_EQ(e.stats().view_goals, views);
   EXPECT_EQ(e.state(), duet::ExplorerState::kDone);
   EXPECT_EQ(e.stop_status(), duet::ExplorationStatus::kAllUnreachable);
+}
+
+// Two cracks in the east wall of a 2 m x 5 m room: a near one (y = 0.5 m) with 0.5 m of line seen
+// beyond it, and a far one (y = 4 m) with 2 m of line - a small pocket and a long frontier, both
+// unreachable. View goals rank by path length less view_frontier_weight x the frontier's length:
+// with 0 the robot (at the south end) looks through the near crack first, by default (3 m/m)
+// through the far one.
+duet::OccupancyGrid room_with_two_cracks() {
+  duet::OccupancyGrid g(kRes, Eigen::Vector2f(0.0f, 0.0f), 100, 100);
+  for (int y = 0; y < g.height(); ++y)
+    for (int x = 0; x < 40; ++x) g.logodds()[g.index(x, y)] = -2.0f;
+  for (int y = 0; y < g.height(); ++y) g.logodds()[g.index(40, y)] = 3.5f;  // the wall
+  for (int x = 40; x < 51; ++x) g.logodds()[g.index(x, 10)] = -2.0f;        // near: the gap and 0.5 m beyond
+  for (int x = 40; x < 81; ++x) g.logodds()[g.index(x, 80)] = -2.0f;        // far: the gap and 2 m beyond
+  return g;
+}
+
+TEST(Explorer, ViewGoalsLookAtTheLongerFrontierFirst) {
+  const duet::Profile p = frontier_only_profile();
+  const duet::OccupancyGrid g = room_with_two_cracks();
+  const duet::Pose2 start{0.6f, 0.3f, 1.0f};
+  const auto first_target = [&](float weight) {
+    duet::ExplorerSettings s;
+    s.final_retries = 0;
+    s.view_frontier_weight = weight;
+    duet::Explorer e(p, s);
+    e.update_map(g, start, 0.0);
+    (void)e.control(start, duet::Twist{}, 0.0);
+    EXPECT_TRUE(e.goal().has_value());
+    EXPECT_FALSE(e.decisions().empty());
+    if (e.decisions().empty() || !e.decisions().back().view) return Eigen::Vector2f(-1.0f, -1.0f);
+    return e.decisions().back().view_target;
+  };
+  EXPECT_NEAR(first_target(0.0f).y(), 10.5f * kRes, 1e-4f);  // the nearest by path
+  duet::ExplorerSettings defaults;
+  EXPECT_EQ(defaults.view_frontier_weight, 3.0f);
+  EXPECT_NEAR(first_target(defaults.view_frontier_weight).y(), 80.5f * kRes, 1e-4f);
+  duet::ExplorerSettings bad;
+  bad.view_frontier_weight = -1.0f;
+  EXPECT_THROW(duet::validate(bad), duet::Error);
+  bad.view_frontier_weight = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(duet::validate(bad), duet::Error);
 }
 
 // A view goal the robot cannot get to is abandoned like any goal; its frontier cell is then not

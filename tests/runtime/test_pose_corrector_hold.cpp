@@ -5,6 +5,7 @@
 // move is a visual jump the gate rejects, so vision does not confirm the wheels then, and the
 // jump asks for the wide re-match at once: contradict_odometry).
 #include <duet/kernels/error.hpp>
+#include <duet/kernels/scan_match.hpp>
 #include <duet/runtime/config/profile.hpp>
 #include <duet/runtime/localization/pose_corrector.hpp>
 #include <duet/runtime/mapping/mapper.hpp>
@@ -19,13 +20,15 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <vector>
 
 namespace duet {
 namespace test_pose_corrector_hold {
 
 struct Kidnap {
-  std::size_t relocalizations = 0, held = 0, asked = 0, ambiguous = 0;
+  std::size_t relocalizations = 0, held = 0, asked = 0, ambiguous = 0, in_obstacle = 0;
+  float truth_clearance_m = 0.0f;  ///< the carried robot's true place: distance to the map's nearest occupied cell
   float error_m = 0.0f;  ///< of the last pose the corrector returned, against the truth
   int first_at = -1;     ///< the update after the carry that relocalised first (-1: none)
   RelocalizationScores scores;  ///< of the last relocalisation
@@ -46,9 +49,11 @@ std::vector<SensorFrame> render_frames(const sim::RgbdRenderer& renderer, const 
 
 /// `confirmed`: confirm_odometry(true) from the carry on; `contradicted`: contradict_odometry()
 /// before the first update after it (vision gated out the jump).
-Kidnap kidnap(bool confirmed, bool contradicted = false, float min_margin = PoseCorrectionSettings{}.relocalize_min_margin) {
+Kidnap kidnap(bool confirmed, bool contradicted = false, float min_margin = PoseCorrectionSettings{}.relocalize_min_margin,
+              float min_clearance = PoseCorrectionSettings{}.relocalize_min_clearance_m) {
   Profile profile = builtin_profile("dual");
   profile.runtime.pose_correction.relocalize_min_margin = min_margin;
+  profile.runtime.pose_correction.relocalize_min_clearance_m = min_clearance;
   const sim::World world = sim::builtin_world("lab");
   const sim::RgbdRenderer renderer(world);
   Mapper mapper(profile.mapping);
@@ -76,8 +81,15 @@ Kidnap kidnap(bool confirmed, bool contradicted = false, float min_margin = Pose
     at = corrector.update(frames, odom, mapper.grid(), t);  // not integrated: the map stays right
     if (first_at < 0 && corrector.relocalizations() > 0) first_at = k;
   }
-  return {corrector.relocalizations(), corrector.relocalizations_held(), corrector.relocalizations_asked(),
-          corrector.relocalizations_ambiguous(), std::hypot(at.x - truth.x, at.y - truth.y), first_at, corrector.last_relocalization_scores()};
+  InflatedGrid distance;
+  occupied_distance(GridView(mapper.grid()), profile.exploration.cells, distance);
+  const Eigen::Vector2i tc = distance.cell_of(Eigen::Vector2f(truth.x, truth.y));
+  Kidnap r{corrector.relocalizations(), corrector.relocalizations_held(), corrector.relocalizations_asked(),
+           corrector.relocalizations_ambiguous(), corrector.relocalizations_in_obstacle(), distance.clearance_m[distance.index(tc.x(), tc.y())]};
+  r.error_m = std::hypot(at.x - truth.x, at.y - truth.y);
+  r.first_at = first_at;
+  r.scores = corrector.last_relocalization_scores();
+  return r;
 }
 
 TEST(PoseCorrectorHold, AConfirmedOdometryHoldsTheWideRematch) {
@@ -114,6 +126,34 @@ TEST(PoseCorrectorHold, AnAmbiguousWideRematchIsNotTaken) {
   EXPECT_THROW(validate(bad), Error);
   bad = {};
   bad.relocalize_distinct_m = 0.0f;
+  EXPECT_THROW(validate(bad), Error);
+}
+
+// A wide fit must leave the robot room to stand: its centre at least relocalize_min_clearance_m
+// from the map's occupied cells. The carried robot's true place is ~0.5-1 m from the lab's
+// nearest wall: the default (0.1 m) takes the re-match; a clearance above the true place's turns
+// it down (counted), and the pose stays with the odometry. The real case (issue 23, belgioioso
+// with one sensor): a false 1.31 m re-match into a wall's inflation, bench/RESULTS.md stop 47.
+TEST(PoseCorrectorHold, AWideRematchIntoAnObstacleIsNotTaken) {
+  const Kidnap plain = kidnap(false);
+  ASSERT_GE(plain.relocalizations, 1u);
+  EXPECT_EQ(plain.in_obstacle, 0u);
+  EXPECT_LT(plain.error_m, 0.15f);
+  ASSERT_GT(plain.truth_clearance_m, PoseCorrectionSettings{}.relocalize_min_clearance_m);
+  ASSERT_LT(plain.truth_clearance_m, 0.95f) << "the lab's carry no longer ends near a wall";
+  const Kidnap refused = kidnap(false, false, PoseCorrectionSettings{}.relocalize_min_margin, plain.truth_clearance_m + 0.05f);
+  EXPECT_EQ(refused.relocalizations, 0u);
+  EXPECT_GE(refused.in_obstacle, 1u);
+  EXPECT_GT(refused.error_m, 0.3f) << "the pose stays with the odometry";
+  const Kidnap off = kidnap(false, false, PoseCorrectionSettings{}.relocalize_min_margin, 0.0f);
+  EXPECT_GE(off.relocalizations, 1u);
+  EXPECT_EQ(off.in_obstacle, 0u);
+  PoseCorrectionSettings bad;
+  bad.relocalize_min_clearance_m = -0.1f;
+  EXPECT_THROW(validate(bad), Error);
+  bad.relocalize_min_clearance_m = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(validate(bad), Error);
+  bad.relocalize_min_clearance_m = 1.5f;
   EXPECT_THROW(validate(bad), Error);
 }
 

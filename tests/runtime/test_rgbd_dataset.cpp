@@ -19,6 +19,8 @@
 #include <string>
 #include <unistd.h>
 
+namespace test_rgbd_dataset {
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -465,3 +467,5 @@ TEST(RgbdDatasetErrors, FrameIndexOutOfRange) {
   EXPECT_EQ(load_error(ds, 1).code(), duet::ErrorCode::kInvalidArgument);
   EXPECT_THROW((void)ds.pose(5), duet::Error);
 }
+
+}  // namespace test_rgbd_dataset

@@ -82,6 +82,7 @@ void fields(V& v, PoseCorrectionSettings& s) {
   v("relocalize_min_conflict", s.relocalize_min_conflict);
   v("relocalize_min_margin", s.relocalize_min_margin);
   v("relocalize_distinct_m", s.relocalize_distinct_m);
+  v("relocalize_min_clearance_m", s.relocalize_min_clearance_m);
   v.section("match", [&](auto& w) { fields(w, s.match); });
 }
 
@@ -131,6 +132,7 @@ void goal_fields(V& v, ExplorerSettings& s) {
   v("nominal_speed_mps", s.nominal_speed_mps);
   v("blacklist_ttl_s", s.blacklist_ttl_s);
   v("final_retries", s.final_retries);
+  v("blocked_recovery_s", s.blocked_recovery_s);
   v.choice("on_done", s.on_done, kOnDoneNames);
   v("patrol_spacing_m", s.patrol_spacing_m);
   v("stop_when_no_frontier", s.stop_when_no_frontier);
@@ -142,6 +144,7 @@ void goal_fields(V& v, ExplorerSettings& s) {
   v("view_range_m", s.view_range_m);
   v("view_min_range_m", s.view_min_range_m);
   v("view_rays", s.view_rays);
+  v("view_frontier_weight", s.view_frontier_weight);
   v("view_looks", s.view_looks);
   v("view_relook_after_s", s.view_relook_after_s);
   v("view_relook_dwell_s", s.view_relook_dwell_s);

@@ -39,6 +39,8 @@ void validate(const PoseCorrectionSettings& s) {
     bad("relocalize_min_conflict must be in [0, 1], got " + std::to_string(s.relocalize_min_conflict));
   if (!(s.relocalize_min_margin >= 0.0f && s.relocalize_min_margin <= 1.0f))
     bad("relocalize_min_margin must be in [0, 1], got " + std::to_string(s.relocalize_min_margin));
+  if (!(s.relocalize_min_clearance_m >= 0.0f && s.relocalize_min_clearance_m <= 1.0f))
+    bad("relocalize_min_clearance_m must be in [0, 1] m, got " + std::to_string(s.relocalize_min_clearance_m));
   if (!in(s.relocalize_distinct_m, 0.0f, 5.0f)) bad("relocalize_distinct_m must be in (0, 5] m, got " + std::to_string(s.relocalize_distinct_m));
 }
 
@@ -189,7 +191,15 @@ Pose2 PoseCorrector::update(const CameraPoints& points, std::span<const SensorFr
       // Another fit elsewhere in the window nearly as good: the scan does not say which.
       const bool ambiguous = clear && pc.relocalize_min_margin > 0.0f && w.score < w.runner_up_score + pc.relocalize_min_margin;
       if (ambiguous) ++relocalizations_ambiguous_;
-      if (clear && !ambiguous) {
+      // A fit that puts the robot in a wall (or the wall's first cells) is a false one.
+      bool in_obstacle = false;
+      if (clear && !ambiguous && pc.relocalize_min_clearance_m > 0.0f) {
+        Eigen::Vector2i c;
+        in_obstacle = distance_.cell_of(Eigen::Vector2f(w.pose.x, w.pose.y), c) &&
+                      distance_.clearance_m[distance_.index(c.x(), c.y())] < pc.relocalize_min_clearance_m;
+        if (in_obstacle) ++relocalizations_in_obstacle_;
+      }
+      if (clear && !ambiguous && !in_obstacle) {
         at = w.pose;
         relocalized = true;
         ++relocalizations_;

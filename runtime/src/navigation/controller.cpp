@@ -43,8 +43,19 @@ Twist Controller::follow(const Pose2& robot, const Twist& current, double now_s,
   NavPlanView plan = link.plan();
   if (!plan.have_map || plan.state == ExplorerState::kDone) return Twist{};
   if (!plan.has_goal()) {
-    // After a decision without a goal, wait for the next map before deciding again.
-    if (plan.wait_for_map) return Twist{};
+    // After a decision without a goal, wait for the next map before deciding again - climbing
+    // out meanwhile when the decision found no traversable cell around the robot.
+    if (plan.wait_for_map) {
+      if (plan.blocked && plan.planning != nullptr) {
+        std::optional<Twist> out = creep_along(robot, current, plan.path, *plan.planning, profile_.chassis.radius_m, plan.dwa);
+        if (!out) out = Escape::step(robot, current, *plan.planning, true, plan.dwa);
+        if (out) {
+          ++stats_.blocked_escapes;
+          return *out;
+        }
+      }
+      return Twist{};
+    }
     link.decide(robot, now_s);
     plan = link.plan();
     if (!plan.has_goal()) return Twist{};

@@ -25,6 +25,7 @@ ExplorerStats merge_stats(ExplorerStats s, const ControllerStats& c) {
   s.local_fallbacks = c.local_fallbacks;
   s.escapes = c.escapes;
   s.cornered_escapes = c.cornered_escapes;
+  s.blocked_escapes = c.blocked_escapes;
   s.slowed = c.slowed;
   s.few_feature_periods = c.few_feature_periods;
   s.feature_seeks = c.feature_seeks;

@@ -58,6 +58,8 @@ void validate(const ExplorerSettings& s) {
                                           "] m (view_range_m, or 10 with no view goals), got " + std::to_string(s.view_min_range_m));
   if (s.view_rays < 4 || s.view_rays > 3600)
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_rays must be in [4, 3600], got " + std::to_string(s.view_rays));
+  if (!(s.view_frontier_weight >= 0.0f && s.view_frontier_weight <= 1000.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_frontier_weight must be in [0, 1000] m/m, got " + std::to_string(s.view_frontier_weight));
   if (s.view_looks < 1 || s.view_looks > 100)
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_looks must be in [1, 100], got " + std::to_string(s.view_looks));
   if (!(s.view_relook_after_s >= 0.0f && s.view_relook_after_s <= 1e5f))
@@ -95,6 +97,8 @@ void validate(const ExplorerSettings& s) {
   in(s.seek_min_range_m, 0.0f, s.seek_range_m, "seek_min_range_m", "m (at most seek_range_m)");
   if (!(s.patrol_spacing_m >= 0.5f && s.patrol_spacing_m <= 100.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::patrol_spacing_m must be in [0.5, 100] m, got " + std::to_string(s.patrol_spacing_m));
+  if (!(s.blocked_recovery_s >= 0.0f && s.blocked_recovery_s <= 3600.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::blocked_recovery_s must be in [0, 3600] s (0 = off), got " + std::to_string(s.blocked_recovery_s));
   if (s.final_retries < 0 || s.final_retries > 1000)
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::final_retries must be in [0, 1000], got " + std::to_string(s.final_retries));
 }

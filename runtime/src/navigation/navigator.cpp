@@ -1,6 +1,7 @@
 /// @file navigator.cpp
 /// Navigator: costmaps, goal life cycle, global path (see navigator.hpp).
 #include <duet/kernels/error.hpp>
+#include <duet/runtime/navigation/blocked_escape.hpp>
 #include <duet/runtime/navigation/navigator.hpp>
 
 #include <algorithm>
@@ -73,6 +74,7 @@ NavPlanState Navigator::plan_state() const {
   p.state = state_;
   p.have_map = have_map_;
   p.wait_for_map = wait_for_map_;
+  p.blocked = blocked_since_s_ >= 0.0 && !goal_ && state_ == ExplorerState::kExploring;
   p.goal_id = goal_id_;
   p.deadline_s = goal_deadline_s_;
   p.dwa = dwa_settings();
@@ -373,9 +375,26 @@ void Navigator::decide(const Pose2& robot, double now_s) {
     if (q.retry) continue;
     if (!proposal) {
       wait_for_map_ = true;
+      path_.clear();
+      if (decision_.status != ExplorationStatus::kRobotBlocked) {
+        blocked_since_s_ = -1.0;
+      } else if (settings_.blocked_recovery_s > 0.0f) {
+        // Blocked: decide again at each map while the controller follows the way out to the
+        // nearest traversable cell (plan_state().blocked; blocked_escape.hpp).
+        if (blocked_since_s_ < 0.0) {
+          blocked_since_s_ = now_s;
+          ++stats_.blocked_recoveries;
+        }
+        if (now_s - blocked_since_s_ <= static_cast<double>(settings_.blocked_recovery_s)) {
+          constexpr float kMaxWayOut = 2.0f;  // [m]
+          path_ = path_out(inflated(), Eigen::Vector2f(robot.x, robot.y), profile_.chassis.radius_m, kMaxWayOut);
+          return;
+        }
+      }
       if (!q.later && ++no_goal_decisions_ > settings_.final_retries) finish(robot, now_s);
       return;
     }
+    blocked_since_s_ = -1.0;
     goal_ = proposal->goal;
     goal_target_ = Eigen::Vector2f(goal_->x, goal_->y);
     if (!recheck_goal()) {

@@ -136,7 +136,10 @@ std::optional<GoalProposal> ViewGoal::propose(GoalQuery& q) {
     const float a = 2.0f * std::numbers::pi_v<float> * static_cast<float>(r) / static_cast<float>(dirs.size());
     dirs[r] = Eigen::Vector2f(std::cos(a), std::sin(a));
   }
+  // Rank: path length to the view cell minus view_frontier_weight x the length of the frontier
+  // the place belongs to (its cluster); each candidate's bound for the walk is its own.
   float best_len = std::numeric_limits<float>::infinity();
+  float best_score = std::numeric_limits<float>::infinity();
   std::size_t best_cell = 0, best_target = 0;
   const std::size_t n = g.cell_count();
   // Pass 0: places not looked at yet. Pass 1 (only if pass 0 found none): places looked at fewer
@@ -157,6 +160,11 @@ std::optional<GoalProposal> ViewGoal::propose(GoalQuery& q) {
         continue;
       }
     }
+    const std::int32_t k = ws_.label[i];
+    const float frontier_m = k >= 0 && static_cast<std::size_t>(k) < f.clusters.size()
+                                 ? static_cast<float>(f.clusters[static_cast<std::size_t>(k)].cells) * g.resolution_m
+                                 : g.resolution_m;
+    const float bonus = settings_.view_frontier_weight * frontier_m;
     for (const Eigen::Vector2f& dir : dirs) {
       // Along the line of sight, through known-free cells only, the first cell the robot can
       // stand on beyond the minimum range.
@@ -164,8 +172,9 @@ std::optional<GoalProposal> ViewGoal::propose(GoalQuery& q) {
         if (!g.in_bounds(ix, iy)) return false;
         const std::size_t c = g.index(ix, iy);
         if (g.state[c] != CellState::kFree) return false;
-        if (t_enter < rmin || !std::isfinite(dist[c]) || dist[c] >= best_len || !q.can_stand_on(ix, iy)) return true;
+        if (t_enter < rmin || !std::isfinite(dist[c]) || dist[c] - bonus >= best_score || !q.can_stand_on(ix, iy)) return true;
         best_len = dist[c];
+        best_score = dist[c] - bonus;
         best_cell = c;
         best_target = i;
         return false;

@@ -30,6 +30,7 @@ void ExplorationRuntime::submit_map_update(MapInput&& input) {
     r.relocalizations_held = corrector_.relocalizations_held();
     r.relocalizations_new_space = corrector_.relocalizations_new_space();
     r.relocalizations_ambiguous = corrector_.relocalizations_ambiguous();
+    r.relocalizations_in_obstacle = corrector_.relocalizations_in_obstacle();
     r.relocalizations_asked = corrector_.relocalizations_asked();
     r.scan_match_time_s = corrector_.time_s();
     r.relocalizations = corrector_.relocalizations();
@@ -110,6 +111,7 @@ void ExplorationRuntime::take_results() {
       stats_.relocalizations_held = r.relocalizations_held;
       stats_.relocalizations_new_space = r.relocalizations_new_space;
       stats_.relocalizations_ambiguous = r.relocalizations_ambiguous;
+      stats_.relocalizations_in_obstacle = r.relocalizations_in_obstacle;
       stats_.relocalizations_asked = r.relocalizations_asked;
       stats_.scan_match_time_s = r.scan_match_time_s;
       note_relocalization(r.relocalizations, r.relocalization, r.relocalization_scores, r.relocalization_conflict, r.now_s);

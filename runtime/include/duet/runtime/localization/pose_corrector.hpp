@@ -83,6 +83,9 @@ class PoseCorrector {
   /// Wide re-matches that would have moved the pose but had a runner-up within
   /// relocalize_min_margin of their score (ambiguous): not taken.
   [[nodiscard]] std::size_t relocalizations_ambiguous() const noexcept { return relocalizations_ambiguous_; }
+  /// Wide re-matches that fit clearly and unambiguously but put the robot's centre nearer than
+  /// relocalize_min_clearance_m to an occupied cell of the map: not taken.
+  [[nodiscard]] std::size_t relocalizations_in_obstacle() const noexcept { return relocalizations_in_obstacle_; }
   /// The last relocalisation's mean scan score at the new pose, at the prediction and of its
   /// runner-up (the best fit farther than relocalize_distinct_m from it), [0, 1].
   [[nodiscard]] const RelocalizationScores& last_relocalization_scores() const noexcept { return last_relocalization_scores_; }
@@ -118,6 +121,7 @@ class PoseCorrector {
   Pose2 last_relocalization_;
   RelocalizationScores last_relocalization_scores_;
   std::size_t relocalizations_ambiguous_ = 0;
+  std::size_t relocalizations_in_obstacle_ = 0;
   double time_s_ = 0.0;
 };
 

@@ -6,7 +6,9 @@
 /// (stall_detector.hpp, slow_zone.hpp, escape.hpp), tried in this order each period:
 ///  - stall: commanded forward, the odometry measures no motion for stall_timeout_s - a
 ///    contact the sensors cannot see: GoalLink::stall() with a contact point just ahead;
-///  - no goal: ask for a decision (GoalLink::decide), zero twist until there is a goal;
+///  - no goal: ask for a decision (GoalLink::decide), zero twist until there is a goal - or,
+///    while the navigator finds the robot blocked, creep along its way out to the nearest
+///    traversable cell (blocked_escape.hpp), else towards more clearance (escape.hpp);
 ///  - time limit: the goal's deadline passed - GoalLink::abandon(kTimeout);
 ///  - feature seeking: where vision sees too few features the top speed is capped, and the
 ///    robot turns in place towards surfaces that can show some (feature_seek.hpp);
@@ -23,6 +25,7 @@
 /// Frames: map frame. Thread safety: one thread at a time.
 #include <duet/kernels/dwa.hpp>
 #include <duet/runtime/config/profile.hpp>
+#include <duet/runtime/navigation/blocked_escape.hpp>
 #include <duet/runtime/navigation/escape.hpp>
 #include <duet/runtime/navigation/feature_seek.hpp>
 #include <duet/runtime/navigation/navigator.hpp>
@@ -54,6 +57,7 @@ struct ControllerStats {
   int local_fallbacks = 0;   ///< periods the dynamic window fell back to the planning grid
   int escapes = 0;           ///< periods spent escaping the dynamic window's margin
   int cornered_escapes = 0;  ///< periods spent escaping a spot (cornered_after_s)
+  int blocked_escapes = 0;   ///< periods spent climbing out while blocked (no goal: NavPlanState::blocked)
   int slowed = 0;            ///< periods the slow zone lowered the top speed
   int few_feature_periods = 0;  ///< periods the top speed was capped for vision
   int feature_seeks = 0;        ///< turns towards surfaces with features

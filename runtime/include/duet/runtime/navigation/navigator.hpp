@@ -21,6 +21,8 @@
 ///    limit, no path, stuck, blocked) for blacklist_ttl_s; a view goal's frontier cell is
 ///    never looked at again;
 ///  - update_map() re-checks the goal (moved again or abandoned when blocked) and re-plans;
+///  - a decision that finds the robot blocked (no traversable cell around it) is taken again
+///    at each map for blocked_recovery_s while the controller climbs the clearance;
 ///  - exploration ends with the decision's status after final_retries decisions without a
 ///    goal at later map updates; then, by ExplorerSettings::on_done, the robot stays, drives
 ///    home, or patrols: waypoints picked along its own trail (every cell it drove through was
@@ -62,6 +64,9 @@ struct NavPlanState {
   ExplorerState state = ExplorerState::kIdle;
   bool have_map = false;
   bool wait_for_map = false;          ///< the last decision found nothing: no new one before the next map
+  /// The last decision found the robot blocked (no traversable cell within its radius) and it is
+  /// recovering (ExplorerSettings::blocked_recovery_s): the controller climbs the clearance.
+  bool blocked = false;
   std::uint64_t goal_id = 0;          ///< changes with every new goal (0: none yet)
   double deadline_s = 0.0;            ///< the goal's time limit (runtime clock)
   DwaSettings dwa;                    ///< the profile's, with the relaxed radius while a relaxed goal is active
@@ -227,6 +232,7 @@ class Navigator {
   std::vector<Eigen::Vector2f> path_;
   double goal_deadline_s_ = 0.0;
   int no_goal_decisions_ = 0;
+  double blocked_since_s_ = -1.0;  ///< the first decision of the current blocked spell (-1: not blocked)
   bool wait_for_map_ = false;
   std::vector<DecisionRecord> log_;
   std::vector<Eigen::Vector2f> frontier_xy_;
