@@ -2,7 +2,7 @@
 // window where the map sees free, the slow zone near obstacles, a cornered robot escapes, view
 // goals look at frontiers the robot cannot reach (and an abandoned one is not tried again), a
 // loop closure's frame shift moves the goal, path and recent obstacles, view goals rank a long
-// frontier before a near pocket, a robot found blocked
+// frontier before a near pocket, Procedure 1's goals handed off on the move, a robot found blocked
 // climbs out instead of giving up, and the command never
 // exceeds the chassis. Goals and their standing room: test_explorer.cpp.
 #include <duet/kernels/error.hpp>
@@ -17,6 +17,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -423,6 +424,57 @@ TEST(Explorer, ViewGoalsLookAtFrontiersTheRobotCannotReach) {
   EXPECT_EQ(e.stats().view_goals, views);
   EXPECT_EQ(e.state(), duet::ExplorerState::kDone);
   EXPECT_EQ(e.stop_status(), duet::ExplorationStatus::kAllUnreachable);
+}
+
+// Procedure 1's goals handed off on the move (simulated_goal_handoff_m): in the half-known room
+// (a static map: the unknown side keeps offering reward) the robot takes simulated goals for 30 s
+// on a perfect chassis. By default each one is reached within the window's goal tolerance and
+// faced (the command of that period is zero); with a 0.4 m handoff each is reached within 0.4 m,
+// and at most periods the robot is still moving when it is - no stop, no turn at X_g.
+TEST(Explorer, SimulatedGoalsAreHandedOffOnTheMove) {
+  const duet::Profile p = duet::builtin_profile("dual_kinect_kobuki");
+  const duet::OccupancyGrid g = half_known_room();
+  for (const float handoff : {0.0f, 0.4f}) {
+    duet::ExplorerSettings s;
+    EXPECT_EQ(s.simulated_goal_handoff_m, 0.0f);
+    s.simulated_goal_handoff_m = handoff;
+    duet::Explorer e(p, s);
+    duet::Pose2 robot{1.0f, 1.5f, 0.0f};
+    duet::Twist current;
+    int reached = 0, moving = 0;
+    double t = 0.0;
+    for (int k = 0; k < 600; ++k, t += 0.05) {
+      if (k % 20 == 0) e.update_map(g, robot, t);
+      const std::optional<duet::Pose2> goal = e.goal();
+      const bool simulated = !e.decisions().empty() && e.decisions().back().status == duet::ExplorationStatus::kSimulatedGoal;
+      const int before = e.stats().goals_reached;
+      const duet::Twist cmd = e.control(robot, current, t);
+      if (goal && simulated && e.stats().goals_reached > before) {
+        ++reached;
+        const float d = std::hypot(goal->x - robot.x, goal->y - robot.y);
+        if (handoff > 0.0f) {
+          EXPECT_LE(d, handoff + 1e-4f) << t;
+          moving += cmd.v > 0.0f ? 1 : 0;
+        } else {
+          EXPECT_LE(d, p.exploration.dwa.goal_tolerance_m + kRes) << t;  // the path ends at the goal cell's centre
+          EXPECT_LE(std::fabs(std::remainder(goal->theta - robot.theta, 6.2831853f)), 0.2f) << t;
+          EXPECT_EQ(cmd.v, 0.0f);
+          EXPECT_EQ(cmd.omega, 0.0f);
+        }
+      }
+      robot.x += cmd.v * 0.05f * std::cos(robot.theta);
+      robot.y += cmd.v * 0.05f * std::sin(robot.theta);
+      robot.theta = std::remainder(robot.theta + cmd.omega * 0.05f, 2.0f * 3.14159265f);
+      current = cmd;
+    }
+    EXPECT_GE(reached, 3) << "handoff " << handoff;
+    if (handoff > 0.0f) EXPECT_GT(2 * moving, reached) << moving << " of " << reached;
+  }
+  duet::ExplorerSettings bad;
+  bad.simulated_goal_handoff_m = -0.1f;
+  EXPECT_THROW(duet::validate(bad), duet::Error);
+  bad.simulated_goal_handoff_m = 6.0f;
+  EXPECT_THROW(duet::validate(bad), duet::Error);
 }
 
 // Two cracks in the east wall of a 2 m x 5 m room: a near one (y = 0.5 m) with 0.5 m of line seen

@@ -145,6 +145,7 @@ void goal_fields(V& v, ExplorerSettings& s) {
   v("view_min_range_m", s.view_min_range_m);
   v("view_rays", s.view_rays);
   v("view_frontier_weight", s.view_frontier_weight);
+  v("simulated_goal_handoff_m", s.simulated_goal_handoff_m);
   v("view_looks", s.view_looks);
   v("view_relook_after_s", s.view_relook_after_s);
   v("view_relook_dwell_s", s.view_relook_dwell_s);

@@ -93,6 +93,15 @@ Twist Controller::follow(const Pose2& robot, const Twist& current, double now_s,
     ++stats_.local_fallbacks;
     fell_back = true;
   }
+  // A goal handed off on the move (a simulated goal within handoff_m): reached, and this
+  // period's command keeps the robot going while the next goal is decided.
+  if (plan.handoff_m > 0.0f && (r.status == DwaStatus::kOk || r.status == DwaStatus::kGoalReached) &&
+      (Eigen::Vector2f(plan.goal->x, plan.goal->y) - here).norm() <= plan.handoff_m) {
+    stuck_since_s_ = -1.0;
+    const Twist cmd = r.cmd;
+    link.goal_reached(plan.goal_id, now_s);  // invalidates `plan`
+    return cmd;
+  }
   switch (r.status) {
     case DwaStatus::kGoalReached: {
       // A goal is a pose: Procedure 1's X_g, or a frontier goal facing the unknown side. Turn to

@@ -64,6 +64,8 @@ void validate(const ExplorerSettings& s) {
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_looks must be in [1, 100], got " + std::to_string(s.view_looks));
   if (!(s.view_relook_after_s >= 0.0f && s.view_relook_after_s <= 1e5f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::view_relook_after_s must be in [0, 1e5] s, got " + std::to_string(s.view_relook_after_s));
+  if (!(s.simulated_goal_handoff_m >= 0.0f && s.simulated_goal_handoff_m <= 5.0f))
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::simulated_goal_handoff_m must be in [0, 5] m, got " + std::to_string(s.simulated_goal_handoff_m));
   if (!(s.frontier_seen_radius_m >= 0.0f && s.frontier_seen_radius_m <= 5.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::frontier_seen_radius_m must be in [0, 5] m, got " + std::to_string(s.frontier_seen_radius_m));
   if (!(s.view_relook_dwell_s >= 0.0f && s.view_relook_dwell_s <= 600.0f))

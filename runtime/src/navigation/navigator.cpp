@@ -75,6 +75,7 @@ NavPlanState Navigator::plan_state() const {
   p.have_map = have_map_;
   p.wait_for_map = wait_for_map_;
   p.blocked = blocked_since_s_ >= 0.0 && !goal_ && state_ == ExplorerState::kExploring;
+  p.handoff_m = goal_ && simulated_goal_ ? settings_.simulated_goal_handoff_m : 0.0f;
   p.goal_id = goal_id_;
   p.deadline_s = goal_deadline_s_;
   p.dwa = dwa_settings();
@@ -422,6 +423,7 @@ void Navigator::decide(const Pose2& robot, double now_s) {
     if (frontier_goal && settings_.frontier_seen_radius_m > 0.0f && decision_.frontier_searched &&
         decision_.frontier.status == FrontierStatus::kFound)
       goal_frontier_ = decision_.frontier.target_xy;
+    simulated_goal_ = proposal->kind == GoalKind::kSimulated;
     if (proposal->kind == GoalKind::kView) ++stats_.view_goals;
     else if (proposal->kind == GoalKind::kSimulated) ++stats_.simulated_goals;
     else ++stats_.frontier_goals;
@@ -494,6 +496,7 @@ bool Navigator::set_goal_to(const Eigen::Vector2f& target, const Pose2& robot, d
   goal_ = Pose2{target.x(), target.y(), robot.theta};
   goal_target_ = target;
   active_ = kNone;
+  simulated_goal_ = false;
   if (!recheck_goal() || !plan(robot)) {
     drop_goal();
     return false;

@@ -136,8 +136,8 @@ std::optional<GoalProposal> ViewGoal::propose(GoalQuery& q) {
     const float a = 2.0f * std::numbers::pi_v<float> * static_cast<float>(r) / static_cast<float>(dirs.size());
     dirs[r] = Eigen::Vector2f(std::cos(a), std::sin(a));
   }
-  // Rank: path length to the view cell minus view_frontier_weight x the length of the frontier
-  // the place belongs to (its cluster); each candidate's bound for the walk is its own.
+  // Rank (first looks): path length to the view cell minus view_frontier_weight x the length of
+  // the frontier the place belongs to (its cluster); looks again: path length alone.
   float best_len = std::numeric_limits<float>::infinity();
   float best_score = std::numeric_limits<float>::infinity();
   std::size_t best_cell = 0, best_target = 0;
@@ -164,7 +164,8 @@ std::optional<GoalProposal> ViewGoal::propose(GoalQuery& q) {
     const float frontier_m = k >= 0 && static_cast<std::size_t>(k) < f.clusters.size()
                                  ? static_cast<float>(f.clusters[static_cast<std::size_t>(k)].cells) * g.resolution_m
                                  : g.resolution_m;
-    const float bonus = settings_.view_frontier_weight * frontier_m;
+    // A look again (pass 1) is for what may have changed since (a door): the nearest first.
+    const float bonus = pass == 0 ? settings_.view_frontier_weight * frontier_m : 0.0f;
     for (const Eigen::Vector2f& dir : dirs) {
       // Along the line of sight, through known-free cells only, the first cell the robot can
       // stand on beyond the minimum range.

@@ -16,7 +16,8 @@
 ///  - dynamic window on the local grid, falling back to the planning grid when hemmed in by
 ///    unseen cells;
 ///  - goal reached: turn to the goal's heading within the paper's motion constraint, then
-///    GoalLink::goal_reached();
+///    GoalLink::goal_reached(); a goal with a handoff distance (NavPlanState::handoff_m) is
+///    reached on the move, within that distance, keeping the window's command;
 ///  - escape: nothing admissible on either grid (inside the margin) - turn towards more
 ///    clearance and creep forward (both sensors look forward/right: reversing is blind);
 ///    still nothing for stuck_timeout_s - GoalLink::abandon(kStuck);

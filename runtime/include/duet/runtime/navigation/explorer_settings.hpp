@@ -101,6 +101,12 @@ struct ExplorerSettings {
   /// worse still for view goals (a side sensor sits 0.12 m off their line of sight through a
   /// gap), which it never turns.
   bool look_with_any_sensor = false;
+  /// Procedure 1's goal X_g counts as reached once the robot is within this distance of it [m],
+  /// [0, 5]: the next decision is taken on the move, without stopping and turning to X_g's
+  /// heading (the paper re-plans when a goal is reached; the simulation's later stages are its
+  /// least certain). 0 = drive to X_g, stop, and face its heading. Frontier, view, home and
+  /// patrol goals are always driven to and faced.
+  float simulated_goal_handoff_m = 0.0f;
   /// A frontier goal ends as soon as the map shows no frontier cell within frontier_seen_radius_m
   /// of the frontier cell it was for: a sensor saw past that frontier on the way (the side sensor
   /// sweeps frontiers the robot drives by), so driving on to it and turning there would show

@@ -67,6 +67,9 @@ struct NavPlanState {
   /// The last decision found the robot blocked (no traversable cell within its radius) and it is
   /// recovering (ExplorerSettings::blocked_recovery_s): the controller climbs the clearance.
   bool blocked = false;
+  /// The goal counts as reached within this distance, without facing its heading (a simulated
+  /// goal with ExplorerSettings::simulated_goal_handoff_m); 0: reach it and face its heading.
+  float handoff_m = 0.0f;
   std::uint64_t goal_id = 0;          ///< changes with every new goal (0: none yet)
   double deadline_s = 0.0;            ///< the goal's time limit (runtime clock)
   DwaSettings dwa;                    ///< the profile's, with the relaxed radius while a relaxed goal is active
@@ -232,7 +235,8 @@ class Navigator {
   std::vector<Eigen::Vector2f> path_;
   double goal_deadline_s_ = 0.0;
   int no_goal_decisions_ = 0;
-  double blocked_since_s_ = -1.0;  ///< the first decision of the current blocked spell (-1: not blocked)
+  double blocked_since_s_ = -1.0;
+  bool simulated_goal_ = false;    ///< the current goal is Procedure 1's X_g  ///< the first decision of the current blocked spell (-1: not blocked)
   bool wait_for_map_ = false;
   std::vector<DecisionRecord> log_;
   std::vector<Eigen::Vector2f> frontier_xy_;
