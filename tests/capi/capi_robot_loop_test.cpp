@@ -43,11 +43,14 @@ TEST(CapiRobotLoop, ExploresTheLabExactlyAsTheSimulatorRun) {
   EXPECT_EQ(value_after(out, "collisions: "), 0.0) << out;
   EXPECT_GT(value_after(out, "coverage: "), 0.1) << out;  // ~0.20 of the lab after its first 40 s
 
-  // The same run in C++ (SimExplore: the simulator and the runtime in process, as duet explore).
+  // The same run in C++ (SimExplore: the simulator and the runtime in process, as duet explore -
+  // with the profile's runtime settings, as duet explore and the C API take them).
+  const duet::Profile profile = duet::builtin_profile("dual");
   duet::sim::ExploreSettings s;
+  s.runtime = profile.runtime;
   s.seed = 1;
   s.max_time_s = seconds;
-  duet::sim::SimExplore sim(duet::sim::builtin_world("lab"), duet::builtin_profile("dual"), s);
+  duet::sim::SimExplore sim(duet::sim::builtin_world("lab"), profile, s);
   sim.run();
   EXPECT_NEAR(value_after(out, "coverage: "), sim.summary().coverage, 5e-5) << out;
   std::vector<std::string> expected;
