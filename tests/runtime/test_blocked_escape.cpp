@@ -49,7 +49,9 @@ TEST(BlockedEscape, PathOutOfANicheIsTheShortestToATraversableCell) {
   for (std::size_t i = 0; i < path.size(); ++i) {
     const Eigen::Vector2i c = g.cell_of(path[i]);
     EXPECT_GE(g.clearance_m[g.index(c.x(), c.y())], kBody) << i;
-    if (i + 1 < path.size()) EXPECT_FALSE(g.traversable[g.index(c.x(), c.y())]) << i;  // the first traversable cell ends it
+    if (i + 1 < path.size()) {
+      EXPECT_FALSE(g.traversable[g.index(c.x(), c.y())]) << i;  // the first traversable cell ends it
+    }
     if (i > 0) {
       const Eigen::Vector2i d = c - g.cell_of(path[i - 1]);
       EXPECT_LE(std::max(std::abs(d.x()), std::abs(d.y())), 1);

@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+namespace test_sim_chassis {
+
 using duet::Pose2;
 using duet::Twist;
 using duet::sim::ChassisBody;
@@ -526,3 +528,5 @@ TEST(SimChassis, InvalidSettingsAndArgumentsThrow) {
   c.advance(1.0);
   EXPECT_EQ(c.true_twist().v, 0.0f);
 }
+
+}  // namespace test_sim_chassis

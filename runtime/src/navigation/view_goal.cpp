@@ -138,14 +138,13 @@ std::optional<GoalProposal> ViewGoal::propose(GoalQuery& q) {
   }
   // Rank (first looks): path length to the view cell minus view_frontier_weight x the length of
   // the frontier the place belongs to (its cluster); looks again: path length alone.
-  float best_len = std::numeric_limits<float>::infinity();
   float best_score = std::numeric_limits<float>::infinity();
   std::size_t best_cell = 0, best_target = 0;
   const std::size_t n = g.cell_count();
   // Pass 0: places not looked at yet. Pass 1 (only if pass 0 found none): places looked at fewer
   // than view_looks times, the last at least view_relook_after_s ago.
   bool too_soon = false;
-  for (int pass = 0; pass < 2 && !std::isfinite(best_len); ++pass)
+  for (int pass = 0; pass < 2 && !std::isfinite(best_score); ++pass)
   for (std::size_t i = 0; i < n && i < mask.size(); ++i) {
     if (mask[i] != 1) continue;  // frontier cells of kept clusters
     // A frontier cell the robot can reach is the frontier search's business (too near, or
@@ -174,7 +173,6 @@ std::optional<GoalProposal> ViewGoal::propose(GoalQuery& q) {
         const std::size_t c = g.index(ix, iy);
         if (g.state[c] != CellState::kFree) return false;
         if (t_enter < rmin || !std::isfinite(dist[c]) || dist[c] - bonus >= best_score || !q.can_stand_on(ix, iy)) return true;
-        best_len = dist[c];
         best_score = dist[c] - bonus;
         best_cell = c;
         best_target = i;
@@ -182,7 +180,7 @@ std::optional<GoalProposal> ViewGoal::propose(GoalQuery& q) {
       });
     }
   }
-  if (!std::isfinite(best_len)) {
+  if (!std::isfinite(best_score)) {
     q.later = q.later || too_soon;
     return std::nullopt;
   }

@@ -28,8 +28,9 @@ struct ExplorerSettings {
   int final_retries = 3;              ///< decisions at later map updates before giving up, [0, 1000]
   /// Blocked: the decision finds no traversable cell within the robot's radius (it stands in an
   /// obstacle's inflation: a narrow niche, or a pose estimate moved next to a wall). For up to
-  /// this long the controller climbs the clearance (escape.hpp) and the navigator decides again
-  /// at each map, before final_retries count and the run gives up "blocked" [s], [0, 3600];
+  /// this long the controller creeps along the way out to a traversable cell (blocked_escape.hpp)
+  /// and the navigator decides again at each map, before final_retries count and the run gives
+  /// up "blocked" [s], [0, 3600];
   /// 0 = give up at once (issue 23: belgioioso, one sensor, gave up at 1598 s with 94 %).
   float blocked_recovery_s = 30.0f;
   /// Once explored: stay where the robot is, or drive back to where it started (the first

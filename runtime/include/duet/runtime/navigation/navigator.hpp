@@ -235,8 +235,8 @@ class Navigator {
   std::vector<Eigen::Vector2f> path_;
   double goal_deadline_s_ = 0.0;
   int no_goal_decisions_ = 0;
-  double blocked_since_s_ = -1.0;
-  bool simulated_goal_ = false;    ///< the current goal is Procedure 1's X_g  ///< the first decision of the current blocked spell (-1: not blocked)
+  double blocked_since_s_ = -1.0;  ///< the first decision of the current blocked spell (-1: not blocked)
+  bool simulated_goal_ = false;    ///< the current goal is Procedure 1's X_g
   bool wait_for_map_ = false;
   std::vector<DecisionRecord> log_;
   std::vector<Eigen::Vector2f> frontier_xy_;

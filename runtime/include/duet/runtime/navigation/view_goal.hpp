@@ -2,12 +2,13 @@
 /// @file view_goal.hpp
 /// A view goal: when every frontier left is unreachable (or blacklisted), a cell the robot can
 /// stand on and reach from which a frontier cell it cannot reach is seen - along a line of
-/// sight through known-free cells, between view_min_range_m and view_range_m - the least path
-/// length less view_frontier_weight x the length of the cell's frontier (a long frontier is a
-/// large unseen region; 0: the nearest by path). The goal faces the frontier cell. A place (a frontier cell and what lies within the
-/// blacklist radius of it) whose view goal was reached or abandoned is looked at again only when
-/// no place not yet looked at is left, at least view_relook_after_s after its last look, and at
-/// most view_looks times in all (a door shut at the first look may be open at the next).
+/// sight through known-free cells, between view_min_range_m and view_range_m - for a first look
+/// the least path length less view_frontier_weight x the length of the cell's frontier (a long
+/// frontier is a large unseen region), for a look again the nearest by path. The goal faces the
+/// frontier cell. A place (a frontier cell and what lies within the blacklist radius of it)
+/// whose view goal was reached or abandoned is looked at again only when no place not yet looked
+/// at is left, at least view_relook_after_s after its last look, and at most view_looks times in
+/// all (a door shut at the first look may be open at the next).
 /// The looking has a budget (ExplorerSettings::view_min_gain_m2): once a window of
 /// view_gain_window_s spent only looking added less known area than that, no more view goals
 /// until a reachable frontier turns up again.
