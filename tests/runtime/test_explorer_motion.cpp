@@ -389,6 +389,47 @@ TEST(Explorer, SimulatedGoalsAreHandedOffOnTheMove) {
   EXPECT_THROW(duet::validate(bad), duet::Error);
 }
 
+// A simulated goal issued within the handoff distance of the robot is a turn to look, not a
+// waypoint: it is reached facing its heading (handing it off would end it at once, unturned).
+// With the largest handoff (5 m) every X_g of the half-known room is issued within it.
+TEST(Explorer, ASimulatedGoalIssuedWithinTheHandoffIsFaced) {
+  const duet::Profile p = duet::builtin_profile("dual_kinect_kobuki");
+  const duet::OccupancyGrid g = half_known_room();
+  duet::ExplorerSettings s;
+  s.simulated_goal_handoff_m = 5.0f;
+  duet::Explorer e(p, s);
+  duet::Pose2 robot{1.0f, 1.5f, 0.0f};
+  duet::Twist current;
+  int reached = 0;
+  std::optional<duet::Pose2> last_goal;
+  float issued_at_m = 0.0f;
+  double t = 0.0;
+  for (int k = 0; k < 600; ++k, t += 0.05) {
+    if (k % 20 == 0) e.update_map(g, robot, t);
+    const std::optional<duet::Pose2> goal = e.goal();
+    const bool simulated = !e.decisions().empty() && e.decisions().back().status == duet::ExplorationStatus::kSimulatedGoal;
+    const int before = e.stats().goals_reached;
+    const duet::Twist cmd = e.control(robot, current, t);
+    if (goal && simulated && e.stats().goals_reached > before) {
+      ++reached;
+      ASSERT_LE(issued_at_m, s.simulated_goal_handoff_m) << t;
+      EXPECT_LE(std::fabs(std::remainder(goal->theta - robot.theta, 6.2831853f)), 0.2f) << t;
+      EXPECT_EQ(cmd.v, 0.0f) << t;
+      EXPECT_EQ(cmd.omega, 0.0f) << t;
+    }
+    // control() may decide: the goal it works on next is the one after the call.
+    const std::optional<duet::Pose2> now_goal = e.goal();
+    if (now_goal && (!last_goal || now_goal->x != last_goal->x || now_goal->y != last_goal->y || now_goal->theta != last_goal->theta))
+      issued_at_m = std::hypot(now_goal->x - robot.x, now_goal->y - robot.y);
+    last_goal = now_goal;
+    robot.x += cmd.v * 0.05f * std::cos(robot.theta);
+    robot.y += cmd.v * 0.05f * std::sin(robot.theta);
+    robot.theta = std::remainder(robot.theta + cmd.omega * 0.05f, 2.0f * 3.14159265f);
+    current = cmd;
+  }
+  EXPECT_GE(reached, 3);
+}
+
 // A loop closure moves the map frame: the goal, its path and the recent obstacles move by the
 // same shift (new = D * old); a non-finite shift is refused and moves nothing.
 TEST(Explorer, ShiftFrameMovesTheGoalThePathAndTheRecentObstacles) {

@@ -75,7 +75,7 @@ NavPlanState Navigator::plan_state() const {
   p.have_map = have_map_;
   p.wait_for_map = wait_for_map_;
   p.blocked = blocked_since_s_ >= 0.0 && !goal_ && state_ == ExplorerState::kExploring;
-  p.handoff_m = goal_ && simulated_goal_ ? settings_.simulated_goal_handoff_m : 0.0f;
+  p.handoff_m = goal_ && handoff_ ? settings_.simulated_goal_handoff_m : 0.0f;
   p.goal_id = goal_id_;
   p.deadline_s = goal_deadline_s_;
   p.dwa = dwa_settings();
@@ -424,6 +424,12 @@ void Navigator::decide(const Pose2& robot, double now_s) {
         decision_.frontier.status == FrontierStatus::kFound)
       goal_frontier_ = decision_.frontier.target_xy;
     simulated_goal_ = proposal->kind == GoalKind::kSimulated;
+    // Handed off on the move only when the robot has a way to drive to it: an X_g the robot
+    // already stands within handoff_m of is a turn to look (its heading is what it was chosen
+    // for), and handing it off would end it at once without the look (lab seed 1: at 19 s such
+    // a goal, 0.14 m away, ended unturned and the next decision left for a frontier 4.6 m back).
+    handoff_ = simulated_goal_ && (Eigen::Vector2f(goal_->x, goal_->y) - Eigen::Vector2f(robot.x, robot.y)).norm() >
+                                      settings_.simulated_goal_handoff_m;
     if (proposal->kind == GoalKind::kView) ++stats_.view_goals;
     else if (proposal->kind == GoalKind::kSimulated) ++stats_.simulated_goals;
     else ++stats_.frontier_goals;
@@ -497,6 +503,7 @@ bool Navigator::set_goal_to(const Eigen::Vector2f& target, const Pose2& robot, d
   goal_target_ = target;
   active_ = kNone;
   simulated_goal_ = false;
+  handoff_ = false;
   if (!recheck_goal() || !plan(robot)) {
     drop_goal();
     return false;

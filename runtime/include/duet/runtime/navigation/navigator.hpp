@@ -237,6 +237,7 @@ class Navigator {
   int no_goal_decisions_ = 0;
   double blocked_since_s_ = -1.0;  ///< the first decision of the current blocked spell (-1: not blocked)
   bool simulated_goal_ = false;    ///< the current goal is Procedure 1's X_g
+  bool handoff_ = false;          ///< ... and was farther than simulated_goal_handoff_m when issued
   bool wait_for_map_ = false;
   std::vector<DecisionRecord> log_;
   std::vector<Eigen::Vector2f> frontier_xy_;
