@@ -223,7 +223,9 @@ nlohmann::json run_log(const sim::SimExplore& run) {
   for (const auto& c : run.collision_log())
     j["collisions"].push_back({{"t_s", c.t_s},
                                {"true_pose", {c.true_pose.x, c.true_pose.y, c.true_pose.theta}},
-                               {"command", {c.command.v, c.command.omega}}});
+                               {"command", {c.command.v, c.command.omega}},
+                               {"estimated_pose", {c.estimated_pose.x, c.estimated_pose.y, c.estimated_pose.theta}},
+                               {"map_clearance_m", std::isfinite(c.map_clearance_m) ? nlohmann::json(c.map_clearance_m) : nlohmann::json(nullptr)}});
   j["runtime_events"] = nlohmann::json::array();  // what the runtime noticed about its inputs and did
   for (const auto& e : run.runtime().events()) j["runtime_events"].push_back({{"t_s", e.t_s}, {"what", e.what}});
   return j;

@@ -13,6 +13,7 @@
 #include "sanitized.hpp"
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace {
@@ -179,6 +180,30 @@ TEST(SimExplore, StopsAtTheTimeLimitAndSaysWhy) {
   EXPECT_EQ(s.stop_reason, duet::sim::StopReason::kTimeLimit);
   EXPECT_NEAR(s.sim_time_s, 5.0, 1e-6);
   EXPECT_FALSE(run.step());  // stopped stays stopped
+}
+
+// A collision's record names how near the robot's own map put an obstacle: the distance from
+// the estimated centre to the nearest occupied cell centre within the radius; free, unknown and
+// farther cells do not count; nothing (or a non-finite point) is infinity.
+TEST(SimExplore, OccupiedClearanceIsTheNearestOccupiedCellCentre) {
+  const duet::Profile p = duet::builtin_profile("dual_kinect_kobuki");
+  const duet::CellThresholds& th = p.exploration.cells;
+  duet::OccupancyGrid g(0.05f, Eigen::Vector2f(-1.0f, -1.0f), 40, 40);  // unknown everywhere
+  const Eigen::Vector2f at(0.0f, 0.0f);
+  const float inf = std::numeric_limits<float>::infinity();
+  EXPECT_EQ(duet::sim::occupied_clearance(g, th, at, 1.0f), inf);  // unknown cells are no obstacles
+  for (float& l : g.logodds()) l = -2.0f;                          // all free
+  EXPECT_EQ(duet::sim::occupied_clearance(g, th, at, 1.0f), inf);
+  g.logodds()[g.index(25, 20)] = 3.5f;  // centre (0.275, 0.025)
+  g.logodds()[g.index(5, 5)] = 3.5f;    // centre (-0.725, -0.725): 1.03 m, outside the radius
+  EXPECT_NEAR(duet::sim::occupied_clearance(g, th, at, 1.0f), std::hypot(0.275f, 0.025f), 1e-5f);
+  EXPECT_EQ(duet::sim::occupied_clearance(g, th, at, 0.2f), inf);
+  g.logodds()[g.index(20, 21)] = 0.3f;  // between the thresholds: uncertain, not occupied
+  EXPECT_NEAR(duet::sim::occupied_clearance(g, th, at, 1.0f), std::hypot(0.275f, 0.025f), 1e-5f);
+  EXPECT_NEAR(duet::sim::occupied_clearance(g, th, Eigen::Vector2f(-0.7f, -0.7f), 1.0f), std::hypot(0.025f, 0.025f), 1e-5f);
+  EXPECT_EQ(duet::sim::occupied_clearance(g, th, Eigen::Vector2f(std::nanf(""), 0.0f), 1.0f), inf);
+  EXPECT_EQ(duet::sim::occupied_clearance(g, th, Eigen::Vector2f(50.0f, 50.0f), 1.0f), inf);  // off the map
+  EXPECT_EQ(duet::sim::occupied_clearance(duet::OccupancyGrid{}, th, at, 1.0f), inf);           // empty grid
 }
 
 TEST(SimExplore, InvalidSettingsAreErrorsThatNameTheField) {

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace duet::sim {
@@ -100,6 +101,21 @@ SimExplore::SimExplore(World world, Profile profile, ExploreSettings settings)
 
 SimExplore::~SimExplore() = default;
 
+float occupied_clearance(const OccupancyGrid& g, const CellThresholds& cells, const Eigen::Vector2f& xy, float radius_m) {
+  float best = std::numeric_limits<float>::infinity();
+  if (!xy.allFinite() || !(radius_m > 0.0f) || g.width() <= 0 || g.height() <= 0) return best;
+  const Eigen::Vector2i c = g.cell_of(xy);
+  const int n = static_cast<int>(std::ceil(radius_m / g.resolution()));
+  for (int y = c.y() - n; y <= c.y() + n; ++y)
+    for (int x = c.x() - n; x <= c.x() + n; ++x) {
+      if (!g.in_bounds(x, y) || classify(g.at(x, y), cells) != CellState::kOccupied) continue;
+      const Eigen::Vector2f centre = g.origin() + Eigen::Vector2f((x + 0.5f) * g.resolution(), (y + 0.5f) * g.resolution());
+      const float d = (centre - xy).norm();
+      if (d <= radius_m) best = std::min(best, d);
+    }
+  return best;
+}
+
 CoverageMeasure measure_coverage(const OccupancyGrid& g, const CellThresholds& th, const TruthGrid& truth,
                                  std::span<const std::uint8_t> reachable) {
   CoverageMeasure m;
@@ -167,7 +183,11 @@ bool SimExplore::step() {
   if (injector_) apply_sim_faults();
   source().advance(t_end);
   t_ = t_end;
-  if (chassis.collisions() > collisions_before) collision_log_.push_back({t_, chassis.true_pose(), runtime_->last_command()});
+  if (chassis.collisions() > collisions_before) {
+    const Pose2 est = runtime_->pose();
+    collision_log_.push_back({t_, chassis.true_pose(), runtime_->last_command(), est,
+                              occupied_clearance(runtime_->map_grid(), profile_.exploration.cells, Eigen::Vector2f(est.x, est.y), 1.0f)});
+  }
   // Paced by the wall clock, the robot's tick comes at its time: the world of the period (its
   // motion, the frames stamped in it) was computed ahead, as sensors deliver frames on their
   // own, so the control period is the runtime's and not the renderer's.

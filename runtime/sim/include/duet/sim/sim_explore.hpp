@@ -47,6 +47,7 @@
 #include <span>
 #include <string>
 #include <unordered_map>
+#include <limits>
 #include <vector>
 
 namespace duet::sim {
@@ -179,7 +180,16 @@ struct CollisionRecord {
   double t_s = 0.0;
   Pose2 true_pose;     ///< where the robot stopped
   Twist command;       ///< the command it was following
+  Pose2 estimated_pose;  ///< where the robot believed it was (the runtime's pose)
+  /// Distance from the estimated centre to the nearest occupied cell centre of the robot's own
+  /// map [m], searched within 1 m (infinity: none): below the chassis radius the robot drove
+  /// into what it had mapped; above, the map or the pose was off by the difference.
+  float map_clearance_m = std::numeric_limits<float>::infinity();
 };
+
+/// The distance from `xy` to the nearest occupied cell centre of `g` within `radius_m` [m]
+/// (infinity: none, or `xy` not finite).
+[[nodiscard]] float occupied_clearance(const OccupancyGrid& g, const CellThresholds& cells, const Eigen::Vector2f& xy, float radius_m);
 
 /// One stamped pose of a trajectory.
 struct StampedPose {
