@@ -203,6 +203,8 @@ TEST(SimExplore, OccupiedClearanceIsTheNearestOccupiedCellCentre) {
   EXPECT_NEAR(duet::sim::occupied_clearance(g, th, Eigen::Vector2f(-0.7f, -0.7f), 1.0f), std::hypot(0.025f, 0.025f), 1e-5f);
   EXPECT_EQ(duet::sim::occupied_clearance(g, th, Eigen::Vector2f(std::nanf(""), 0.0f), 1.0f), inf);
   EXPECT_EQ(duet::sim::occupied_clearance(g, th, Eigen::Vector2f(50.0f, 50.0f), 1.0f), inf);  // off the map
+  EXPECT_EQ(duet::sim::occupied_clearance(g, th, Eigen::Vector2f(3e30f, -3e30f), 1.0f), inf);  // far off (no int overflow)
+  EXPECT_NEAR(duet::sim::occupied_clearance(g, th, Eigen::Vector2f(0.275f, 1.5f), 1.6f), 1.475f, 1e-5f);  // off the map, within the radius
   EXPECT_EQ(duet::sim::occupied_clearance(duet::OccupancyGrid{}, th, at, 1.0f), inf);           // empty grid
 }
 

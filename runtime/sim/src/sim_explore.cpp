@@ -104,13 +104,16 @@ SimExplore::~SimExplore() = default;
 float occupied_clearance(const OccupancyGrid& g, const CellThresholds& cells, const Eigen::Vector2f& xy, float radius_m) {
   float best = std::numeric_limits<float>::infinity();
   if (!xy.allFinite() || !(radius_m > 0.0f) || g.width() <= 0 || g.height() <= 0) return best;
+  // Farther than the radius from the grid's rectangle: no cell can count (and the cell index of
+  // a far point may not fit an int).
+  const Eigen::Vector2f lo = g.origin(), hi = lo + g.resolution() * Eigen::Vector2f(static_cast<float>(g.width()), static_cast<float>(g.height()));
+  if (xy.x() < lo.x() - radius_m || xy.y() < lo.y() - radius_m || xy.x() > hi.x() + radius_m || xy.y() > hi.y() + radius_m) return best;
   const Eigen::Vector2i c = g.cell_of(xy);
   const int n = static_cast<int>(std::ceil(radius_m / g.resolution()));
   for (int y = c.y() - n; y <= c.y() + n; ++y)
     for (int x = c.x() - n; x <= c.x() + n; ++x) {
       if (!g.in_bounds(x, y) || classify(g.at(x, y), cells) != CellState::kOccupied) continue;
-      const Eigen::Vector2f centre = g.origin() + Eigen::Vector2f((x + 0.5f) * g.resolution(), (y + 0.5f) * g.resolution());
-      const float d = (centre - xy).norm();
+      const float d = (g.cell_center(x, y) - xy).norm();
       if (d <= radius_m) best = std::min(best, d);
     }
   return best;
