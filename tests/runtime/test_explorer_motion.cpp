@@ -336,47 +336,71 @@ TEST(Explorer, BlockedRobotClimbsOutInsteadOfGivingUp) {
   EXPECT_GT(min_clearance, p.chassis.radius_m);
 }
 
+// One simulated goal reached while driving: the goal, the robot where it was reached, the
+// command of that period, the time and how far the goal was from the robot when it was issued.
+struct SimulatedGoalReached {
+  duet::Pose2 goal, robot;
+  duet::Twist cmd;
+  double t_s = 0.0;
+  float issued_at_m = 0.0f;
+};
+
+// 30 s of the explorer in the half-known room (a static map, updated each second: the unknown
+// side keeps offering reward) on a perfect chassis from (1, 1.5); `reached` is called for each
+// simulated goal reached.
+template <typename OnReached>
+void drive_simulated_goals(duet::Explorer& e, OnReached&& reached) {
+  const duet::OccupancyGrid g = half_known_room();
+  duet::Pose2 robot{1.0f, 1.5f, 0.0f};
+  duet::Twist current;
+  std::optional<duet::Pose2> last_goal;
+  float issued_at_m = 0.0f;
+  double t = 0.0;
+  for (int k = 0; k < 600; ++k, t += 0.05) {
+    if (k % 20 == 0) e.update_map(g, robot, t);
+    const std::optional<duet::Pose2> goal = e.goal();
+    const bool simulated = !e.decisions().empty() && e.decisions().back().status == duet::ExplorationStatus::kSimulatedGoal;
+    const int before = e.stats().goals_reached;
+    const duet::Twist cmd = e.control(robot, current, t);
+    if (goal && simulated && e.stats().goals_reached > before) reached(SimulatedGoalReached{*goal, robot, cmd, t, issued_at_m});
+    // control() may decide: the goal it works on next is the one after the call.
+    const std::optional<duet::Pose2> now_goal = e.goal();
+    if (now_goal && (!last_goal || now_goal->x != last_goal->x || now_goal->y != last_goal->y || now_goal->theta != last_goal->theta))
+      issued_at_m = std::hypot(now_goal->x - robot.x, now_goal->y - robot.y);
+    last_goal = now_goal;
+    robot.x += cmd.v * 0.05f * std::cos(robot.theta);
+    robot.y += cmd.v * 0.05f * std::sin(robot.theta);
+    robot.theta = std::remainder(robot.theta + cmd.omega * 0.05f, 2.0f * 3.14159265f);
+    current = cmd;
+  }
+}
+
 // Procedure 1's goals handed off on the move (simulated_goal_handoff_m): in the half-known room
-// (a static map: the unknown side keeps offering reward) the robot takes simulated goals for 30 s
-// on a perfect chassis. By default each one is reached within the window's goal tolerance and
-// faced (the command of that period is zero); with a 0.4 m handoff each is reached within 0.4 m,
-// and at most periods the robot is still moving when it is - no stop, no turn at X_g.
+// the robot takes simulated goals for 30 s on a perfect chassis. By default each one is reached
+// within the window's goal tolerance and faced (the command of that period is zero); with a
+// 0.4 m handoff each is reached within 0.4 m, and at most periods the robot is still moving when
+// it is - no stop, no turn at X_g.
 TEST(Explorer, SimulatedGoalsAreHandedOffOnTheMove) {
   const duet::Profile p = duet::builtin_profile("dual_kinect_kobuki");
-  const duet::OccupancyGrid g = half_known_room();
   for (const float handoff : {0.0f, 0.4f}) {
     duet::ExplorerSettings s;
     EXPECT_EQ(s.simulated_goal_handoff_m, 0.0f);
     s.simulated_goal_handoff_m = handoff;
     duet::Explorer e(p, s);
-    duet::Pose2 robot{1.0f, 1.5f, 0.0f};
-    duet::Twist current;
     int reached = 0, moving = 0;
-    double t = 0.0;
-    for (int k = 0; k < 600; ++k, t += 0.05) {
-      if (k % 20 == 0) e.update_map(g, robot, t);
-      const std::optional<duet::Pose2> goal = e.goal();
-      const bool simulated = !e.decisions().empty() && e.decisions().back().status == duet::ExplorationStatus::kSimulatedGoal;
-      const int before = e.stats().goals_reached;
-      const duet::Twist cmd = e.control(robot, current, t);
-      if (goal && simulated && e.stats().goals_reached > before) {
-        ++reached;
-        const float d = std::hypot(goal->x - robot.x, goal->y - robot.y);
-        if (handoff > 0.0f) {
-          EXPECT_LE(d, handoff + 1e-4f) << t;
-          moving += cmd.v > 0.0f ? 1 : 0;
-        } else {
-          EXPECT_LE(d, p.exploration.dwa.goal_tolerance_m + kRes) << t;  // the path ends at the goal cell's centre
-          EXPECT_LE(std::fabs(std::remainder(goal->theta - robot.theta, 6.2831853f)), 0.2f) << t;
-          EXPECT_EQ(cmd.v, 0.0f);
-          EXPECT_EQ(cmd.omega, 0.0f);
-        }
+    drive_simulated_goals(e, [&](const SimulatedGoalReached& r) {
+      ++reached;
+      const float d = std::hypot(r.goal.x - r.robot.x, r.goal.y - r.robot.y);
+      if (handoff > 0.0f) {
+        EXPECT_LE(d, handoff + 1e-4f) << r.t_s;
+        moving += r.cmd.v > 0.0f ? 1 : 0;
+      } else {
+        EXPECT_LE(d, p.exploration.dwa.goal_tolerance_m + kRes) << r.t_s;  // the path ends at the goal cell's centre
+        EXPECT_LE(std::fabs(std::remainder(r.goal.theta - r.robot.theta, 6.2831853f)), 0.2f) << r.t_s;
+        EXPECT_EQ(r.cmd.v, 0.0f);
+        EXPECT_EQ(r.cmd.omega, 0.0f);
       }
-      robot.x += cmd.v * 0.05f * std::cos(robot.theta);
-      robot.y += cmd.v * 0.05f * std::sin(robot.theta);
-      robot.theta = std::remainder(robot.theta + cmd.omega * 0.05f, 2.0f * 3.14159265f);
-      current = cmd;
-    }
+    });
     EXPECT_GE(reached, 3) << "handoff " << handoff;
     if (handoff > 0.0f) {
       EXPECT_GT(2 * moving, reached) << moving << " of " << reached;
@@ -394,39 +418,17 @@ TEST(Explorer, SimulatedGoalsAreHandedOffOnTheMove) {
 // With the largest handoff (5 m) every X_g of the half-known room is issued within it.
 TEST(Explorer, ASimulatedGoalIssuedWithinTheHandoffIsFaced) {
   const duet::Profile p = duet::builtin_profile("dual_kinect_kobuki");
-  const duet::OccupancyGrid g = half_known_room();
   duet::ExplorerSettings s;
   s.simulated_goal_handoff_m = 5.0f;
   duet::Explorer e(p, s);
-  duet::Pose2 robot{1.0f, 1.5f, 0.0f};
-  duet::Twist current;
   int reached = 0;
-  std::optional<duet::Pose2> last_goal;
-  float issued_at_m = 0.0f;
-  double t = 0.0;
-  for (int k = 0; k < 600; ++k, t += 0.05) {
-    if (k % 20 == 0) e.update_map(g, robot, t);
-    const std::optional<duet::Pose2> goal = e.goal();
-    const bool simulated = !e.decisions().empty() && e.decisions().back().status == duet::ExplorationStatus::kSimulatedGoal;
-    const int before = e.stats().goals_reached;
-    const duet::Twist cmd = e.control(robot, current, t);
-    if (goal && simulated && e.stats().goals_reached > before) {
-      ++reached;
-      ASSERT_LE(issued_at_m, s.simulated_goal_handoff_m) << t;
-      EXPECT_LE(std::fabs(std::remainder(goal->theta - robot.theta, 6.2831853f)), 0.2f) << t;
-      EXPECT_EQ(cmd.v, 0.0f) << t;
-      EXPECT_EQ(cmd.omega, 0.0f) << t;
-    }
-    // control() may decide: the goal it works on next is the one after the call.
-    const std::optional<duet::Pose2> now_goal = e.goal();
-    if (now_goal && (!last_goal || now_goal->x != last_goal->x || now_goal->y != last_goal->y || now_goal->theta != last_goal->theta))
-      issued_at_m = std::hypot(now_goal->x - robot.x, now_goal->y - robot.y);
-    last_goal = now_goal;
-    robot.x += cmd.v * 0.05f * std::cos(robot.theta);
-    robot.y += cmd.v * 0.05f * std::sin(robot.theta);
-    robot.theta = std::remainder(robot.theta + cmd.omega * 0.05f, 2.0f * 3.14159265f);
-    current = cmd;
-  }
+  drive_simulated_goals(e, [&](const SimulatedGoalReached& r) {
+    ++reached;
+    ASSERT_LE(r.issued_at_m, s.simulated_goal_handoff_m) << r.t_s;
+    EXPECT_LE(std::fabs(std::remainder(r.goal.theta - r.robot.theta, 6.2831853f)), 0.2f) << r.t_s;
+    EXPECT_EQ(r.cmd.v, 0.0f) << r.t_s;
+    EXPECT_EQ(r.cmd.omega, 0.0f) << r.t_s;
+  });
   EXPECT_GE(reached, 3);
 }
 

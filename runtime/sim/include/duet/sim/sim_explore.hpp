@@ -42,12 +42,12 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string>
 #include <unordered_map>
-#include <limits>
 #include <vector>
 
 namespace duet::sim {
