@@ -15,6 +15,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -22,11 +23,17 @@ namespace {
 using duet_test::frontier_only_profile;
 using duet_test::half_known_room;
 
+duet::ExplorerSettings ttl_30s() {
+  duet::ExplorerSettings s;
+  s.blacklist_ttl_s = 30.0f;
+  return s;
+}
+
 /// A strategy that proposes a fixed goal (or nothing) and records what it is told.
 class Scripted final : public duet::GoalStrategy {
  public:
   Scripted(std::optional<duet::Pose2> goal, std::vector<std::string>& calls, std::string name)
-      : GoalStrategy(30.0f), goal_(goal), calls_(calls), name_(std::move(name)) {}
+      : GoalStrategy(ttl_30s()), goal_(goal), calls_(calls), name_(std::move(name)) {}
   [[nodiscard]] std::string_view name() const override { return name_; }
   std::optional<duet::GoalProposal> propose(duet::GoalQuery& q) override {
     calls_.push_back(name_ + ".propose");
@@ -103,6 +110,50 @@ TEST(GoalStrategy, NoProposalWaitsForTheNextMapAndFinishesAfterTheRetries) {
   nav.decide(robot, 1.0);
   EXPECT_EQ(calls.size(), 2u);
   EXPECT_EQ(nav.state(), duet::ExplorerState::kDone);
+}
+
+// Every goal abandoned at once (a goal the planner finds a path to and the robot cannot reach):
+// once every frontier is blacklisted the ones abandoned for a while are forgotten and tried
+// again - but a place abandoned max_goal_failures times stays blacklisted, so the decisions end
+// instead of trying one goal for ever (Willow seed 1, stop 48: 15 tries in 450 s).
+TEST(GoalStrategy, APlaceAbandonedMaxGoalFailuresTimesIsBlacklistedForGood) {
+  const duet::Profile p = frontier_only_profile();
+  const duet::Pose2 robot{1.0f, 1.5f, 0.0f};
+  // Abandons each goal at once; returns the goals taken before the decisions found none (or
+  // `cap` when they did not end).
+  auto abandon_all = [&](int max_failures, int cap) {
+    duet::ExplorerSettings s = p.runtime.explorer;
+    s.max_goal_failures = max_failures;
+    s.blacklist_ttl_s = 1000.0f;  // only the forgetting brings a goal back within the test
+    std::vector<std::unique_ptr<duet::GoalStrategy>> list;
+    list.push_back(std::make_unique<duet::ExplorationGoal>(p, s));
+    auto nav = std::make_unique<duet::Navigator>(p, s, std::move(list));
+    nav->update_map(half_known_room(), robot, 0.0);
+    int goals = 0;
+    for (double t = 0.0; goals < cap; t += 1.0) {
+      nav->decide(robot, t);
+      if (!nav->goal()) break;
+      ++goals;
+      nav->abandon(nav->goal_id(), duet::AbandonReason::kTimeout, t + 0.5);
+    }
+    return std::make_pair(goals, nav->goal_failures());
+  };
+  const auto [goals, failures] = abandon_all(3, 200);
+  ASSERT_FALSE(failures.empty());
+  EXPECT_LT(goals, 200);  // the decisions ended
+  int total = 0;
+  for (const duet::GoalFailures& f : failures) {
+    EXPECT_EQ(f.count, 3) << "at " << f.xy.transpose();  // each place tried three times, not more
+    total += f.count;
+  }
+  EXPECT_EQ(total, goals);
+  // A place is tried again after the forgetting: more than one goal per place.
+  EXPECT_GT(goals, static_cast<int>(failures.size()));
+  // 0 = never for good: the same goals come back as long as the decisions go on.
+  EXPECT_EQ(abandon_all(0, 3 * goals + 5).first, 3 * goals + 5);
+  duet::ExplorerSettings bad = p.runtime.explorer;
+  bad.max_goal_failures = -1;
+  EXPECT_THROW(duet::validate(bad), duet::Error);
 }
 
 TEST(GoalStrategy, EmptyOrNullListIsRejected) {

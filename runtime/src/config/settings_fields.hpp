@@ -132,6 +132,7 @@ void goal_fields(V& v, ExplorerSettings& s) {
   v("nominal_speed_mps", s.nominal_speed_mps);
   v("blacklist_ttl_s", s.blacklist_ttl_s);
   v("final_retries", s.final_retries);
+  v("max_goal_failures", s.max_goal_failures);
   v("blocked_recovery_s", s.blocked_recovery_s);
   v.choice("on_done", s.on_done, kOnDoneNames);
   v("patrol_spacing_m", s.patrol_spacing_m);

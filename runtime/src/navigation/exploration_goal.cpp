@@ -8,7 +8,7 @@
 namespace duet {
 
 ExplorationGoal::ExplorationGoal(const Profile& profile, const ExplorerSettings& settings)
-    : GoalStrategy(settings.blacklist_ttl_s),
+    : GoalStrategy(settings),
       strategy_(profile.exploration.strategy),
       stop_when_no_frontier_(settings.stop_when_no_frontier) {}
 

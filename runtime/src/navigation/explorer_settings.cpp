@@ -101,6 +101,8 @@ void validate(const ExplorerSettings& s) {
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::patrol_spacing_m must be in [0.5, 100] m, got " + std::to_string(s.patrol_spacing_m));
   if (!(s.blocked_recovery_s >= 0.0f && s.blocked_recovery_s <= 3600.0f))
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::blocked_recovery_s must be in [0, 3600] s (0 = off), got " + std::to_string(s.blocked_recovery_s));
+  if (s.max_goal_failures < 0 || s.max_goal_failures > 1000)
+    fail(ErrorCode::kInvalidArgument, "ExplorerSettings::max_goal_failures must be in [0, 1000], got " + std::to_string(s.max_goal_failures));
   if (s.final_retries < 0 || s.final_retries > 1000)
     fail(ErrorCode::kInvalidArgument, "ExplorerSettings::final_retries must be in [0, 1000], got " + std::to_string(s.final_retries));
 }

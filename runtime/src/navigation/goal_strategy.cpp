@@ -12,7 +12,8 @@ namespace duet {
 void GoalStrategy::goal_ended(const GoalEnd& end) {
   constexpr double kForever = std::numeric_limits<double>::infinity();
   if (!end.reached) {
-    end.blacklist.add(end.target, end.now_s, blacklist_ttl_s_);
+    const bool for_good = max_goal_failures_ > 0 && end.failures >= max_goal_failures_;
+    end.blacklist.add(end.target, end.now_s, for_good ? kForever : static_cast<double>(blacklist_ttl_s_));
     return;
   }
   // A frontier that is still a frontier after the robot stood at it and looked at it cannot be

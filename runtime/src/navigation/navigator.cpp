@@ -295,15 +295,17 @@ void Navigator::abandon_goal(int& counter, double now_s) {
     patrol_goal_ended(false);
     return;
   }
+  int failures = 0;
   if (goal_) {  // counted per place for the report of what was left (unexplored.hpp)
     const float r = profile_.exploration.strategy.frontier.blacklist_radius_m;
     auto same = std::find_if(failures_.begin(), failures_.end(),
                              [&](const GoalFailures& f) { return (f.xy - goal_target_).squaredNorm() <= r * r; });
-    if (same != failures_.end()) ++same->count;
-    else failures_.push_back(GoalFailures{goal_target_, 1});
+    if (same != failures_.end()) failures = ++same->count;
+    else failures_.push_back(GoalFailures{goal_target_, failures = 1});
   }
   // The strategy it came from decides what is not tried again (for a while, or for good).
-  if (GoalStrategy* by = goal_ ? active() : nullptr) by->goal_ended(GoalEnd{false, now_s, goal_target_, decision_, blacklist_, stats_});
+  if (GoalStrategy* by = goal_ ? active() : nullptr)
+    by->goal_ended(GoalEnd{false, now_s, goal_target_, decision_, blacklist_, stats_, failures});
   drop_goal();
 }
 

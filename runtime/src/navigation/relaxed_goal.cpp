@@ -7,7 +7,7 @@
 namespace duet {
 
 RelaxedFrontierGoal::RelaxedFrontierGoal(const Profile& profile, const ExplorerSettings& settings)
-    : GoalStrategy(settings.blacklist_ttl_s),
+    : GoalStrategy(settings),
       inflation_(profile.exploration.inflation),
       frontier_(profile.exploration.strategy.frontier),
       settings_(settings),

@@ -11,7 +11,7 @@
 namespace duet {
 
 ViewGoal::ViewGoal(const Profile& profile, const ExplorerSettings& settings)
-    : GoalStrategy(settings.blacklist_ttl_s),
+    : GoalStrategy(settings),
       frontier_(profile.exploration.strategy.frontier),
       settings_(settings),
       cells_(profile.exploration.cells) {}

@@ -25,6 +25,14 @@ struct ExplorerSettings {
   float goal_timeout_s = 20.0f;       ///< fixed part of a goal's time limit [s], (0, inf)
   float nominal_speed_mps = 0.3f;     ///< path length / this is added to the time limit [m/s], (0, inf)
   float blacklist_ttl_s = 60.0f;      ///< how long an abandoned goal stays blacklisted [s], (0, inf]
+  /// A place (within the frontier search's blacklist_radius_m of the first goal abandoned there)
+  /// whose goals were abandoned this many times is blacklisted for good, [0, 1000]; 0 = never.
+  /// When every frontier is blacklisted the ones abandoned for a while are forgotten and tried
+  /// again (a goal timed out behind a person is not a reason to stop), so without it a goal the
+  /// robot cannot reach but the planner can is tried again and again (Willow seed 1, stop 48:
+  /// 15 tries of one goal 2.3 m away, 450 s without moving on). The summary lists such a place
+  /// as "blacklisted after N failures".
+  int max_goal_failures = 3;
   int final_retries = 3;              ///< decisions at later map updates before giving up, [0, 1000]
   /// Blocked: the decision finds no traversable cell within the robot's radius (it stands in an
   /// obstacle's inflation: a narrow niche, or a pose estimate moved next to a wall). For up to

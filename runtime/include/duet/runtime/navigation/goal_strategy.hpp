@@ -74,6 +74,9 @@ struct GoalEnd {
   const ExplorationDecision& decision;  ///< the decision the goal came from
   GoalBlacklist& blacklist;
   ExplorerStats& stats;
+  /// Abandoned: the goals abandoned at this place so far, this one included (Navigator counts
+  /// them per place, within the blacklist radius); 0 when reached.
+  int failures = 0;
 };
 
 class GoalStrategy {
@@ -88,7 +91,8 @@ class GoalStrategy {
     (void)active;
   }
   /// Its goal ended. The default: a goal reached at a frontier is blacklisted for good (it was
-  /// looked at from there), one abandoned for blacklist_ttl_s.
+  /// looked at from there), one abandoned for blacklist_ttl_s - for good once its place was
+  /// abandoned max_goal_failures times (ExplorerSettings).
   virtual void goal_ended(const GoalEnd& end);
   /// The map frame moved by D (loop closure).
   virtual void shift(const Pose2& D) { (void)D; }
@@ -103,10 +107,12 @@ class GoalStrategy {
   [[nodiscard]] virtual std::optional<float> robot_radius_m() const { return std::nullopt; }
 
  protected:
-  /// blacklist_ttl_s: how long the default goal_ended() keeps an abandoned goal out
-  /// (ExplorerSettings::blacklist_ttl_s) [s].
-  explicit GoalStrategy(float blacklist_ttl_s) : blacklist_ttl_s_(blacklist_ttl_s) {}
+  /// The default goal_ended()'s blacklisting: ExplorerSettings::blacklist_ttl_s and
+  /// max_goal_failures.
+  explicit GoalStrategy(const ExplorerSettings& settings)
+      : blacklist_ttl_s_(settings.blacklist_ttl_s), max_goal_failures_(settings.max_goal_failures) {}
   float blacklist_ttl_s_;
+  int max_goal_failures_;
 };
 
 /// The default ordered list for a profile (see the file comment).
