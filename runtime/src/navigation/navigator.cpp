@@ -300,8 +300,8 @@ void Navigator::abandon_goal(int& counter, double now_s) {
     const float r = profile_.exploration.strategy.frontier.blacklist_radius_m;
     auto same = std::find_if(failures_.begin(), failures_.end(),
                              [&](const GoalFailures& f) { return (f.xy - goal_target_).squaredNorm() <= r * r; });
-    if (same != failures_.end()) failures = ++same->count;
-    else failures_.push_back(GoalFailures{goal_target_, failures = 1});
+    if (same == failures_.end()) same = failures_.insert(same, GoalFailures{goal_target_, 0});
+    failures = ++same->count;
   }
   // The strategy it came from decides what is not tried again (for a while, or for good).
   if (GoalStrategy* by = goal_ ? active() : nullptr)

@@ -31,7 +31,7 @@ struct ExplorerSettings {
   /// again (a goal timed out behind a person is not a reason to stop), so without it a goal the
   /// robot cannot reach but the planner can is tried again and again (Willow seed 1, stop 48:
   /// 15 tries of one goal 2.3 m away, 450 s without moving on). The summary lists such a place
-  /// as "blacklisted after N failures".
+  /// as "abandoned after N failed goals" (unexplored.hpp).
   int max_goal_failures = 3;
   int final_retries = 3;              ///< decisions at later map updates before giving up, [0, 1000]
   /// Blocked: the decision finds no traversable cell within the robot's radius (it stands in an

@@ -18,7 +18,8 @@
 ///    a relaxed grid, view goals); the first goal proposed is moved to a cell the dynamic window
 ///    can stand on (standoff), then a path is planned (A* on the planning grid);
 ///  - a frontier goal reached and looked at is blacklisted for good; a goal abandoned (time
-///    limit, no path, stuck, blocked) for blacklist_ttl_s; a view goal's frontier cell is
+///    limit, no path, stuck, blocked) for blacklist_ttl_s, for good once max_goal_failures goals
+///    were abandoned at its place; a view goal's frontier cell is
 ///    never looked at again;
 ///  - update_map() re-checks the goal (moved again or abandoned when blocked) and re-plans;
 ///  - a decision that finds the robot blocked (no traversable cell around it) is taken again
