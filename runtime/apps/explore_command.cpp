@@ -51,6 +51,7 @@ struct ExploreOptions {
   bool true_pose = false;
   bool raw_odometry = false;
   float gyro_noise = 0.0f;
+  float gyro_bias = -1.0f;  // < 0: the simulator's default (ChassisSimSettings::gyro_bias_std_radps)
   bool no_loop_closure = false;
   std::string on_done;  // empty: the profile's exploration.on_done
   std::vector<std::string> faults;  // --fault, added to the profile's
@@ -192,10 +193,11 @@ int run_explore(const ExploreOptions& o) {
   else if (o.on_done == "patrol") es.runtime.explorer.on_done = OnDone::kPatrol;
   if (o.raw_odometry) es.runtime.pose_correction.enabled = false;
   if (o.no_loop_closure) es.runtime.loop_closure.enabled = false;
-  if (o.gyro_noise != 0.0f) {
+  if (o.gyro_noise != 0.0f || o.gyro_bias >= 0.0f) {
     es.chassis = sim::ChassisSimSettings::from_profile(profile.chassis);
     es.chassis->gyro_heading = true;  // as the default chassis (the Kobuki's gyro heading)
     es.chassis->gyro_noise_density = o.gyro_noise;
+    if (o.gyro_bias >= 0.0f) es.chassis->gyro_bias_std_radps = o.gyro_bias;
   }
   const bool tty = stderr_is_tty() && !o.quiet;
   int stopped_by = 0;  // the stop signal received, 0 if none
@@ -487,6 +489,10 @@ void add_explore_command(CLI::App& app, int& exit_code) {
   cmd->add_option("--gyro-noise", o->gyro_noise,
                   "simulated gyro's rate-noise density [rad/s/sqrt(Hz)], [0, 0.01] (ChassisSimSettings::gyro_noise_density; 0 = none)")
       ->capture_default_str();
+  cmd->add_option("--gyro-bias", o->gyro_bias,
+                  "std of the simulated gyro's constant bias, drawn once per run from the seed [rad/s], [0, 0.1] "
+                  "(ChassisSimSettings::gyro_bias_std_radps; default 8.7e-5; 0 = a gyro without bias)")
+      ->check(CLI::Range(0.0f, 0.1f));
   cmd->add_flag("--no-loop-closure", o->no_loop_closure,
                 "no loop closure (LoopClosureSettings::enabled = false): the map is the front end's (odometry + scan matching)");
   add_overlay_options(cmd, o->configs, o->sets);

@@ -271,6 +271,9 @@ TEST(DuetCli, ExploreErrorsNameTheFileAndTheProblem) {
   r = run("explore -q --world lab --strategy greedy --out " + (dir / "o").string());
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("--strategy"), std::string::npos) << r.output;
+  r = run("explore -q --world lab --gyro-bias 0.5 --out " + (dir / "o").string());
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.output.find("--gyro-bias"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "o" / "summary.json"));
 }
 
