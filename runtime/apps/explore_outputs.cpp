@@ -81,6 +81,8 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                {"error_end_m", s.pose_error_m},
                {"error_max_m", s.pose_error_max_m},
                {"heading_error_end_deg", s.heading_error_deg},
+               {"heading_rate_end_radps", s.heading_rate_radps},
+               {"gyro_bias_true_radps", s.gyro_bias_radps},
                {"scan_matches", s.scan_matches},
                {"scan_match_rejected", s.scan_match_rejected},
                {"relocalizations_held", s.relocalizations_held},
@@ -232,11 +234,11 @@ nlohmann::json run_log(const sim::SimExplore& run) {
 }
 
 void write_health_csv(const std::filesystem::path& path, const std::vector<sim::HealthSample>& health) {
-  std::string text = "time_s,rss_mb,tick_mean_ms,tick_max_ms,step_mean_ms,grid_cells,submaps,explorer_state\n";
+  std::string text = "time_s,rss_mb,tick_mean_ms,tick_max_ms,step_mean_ms,grid_cells,submaps,explorer_state,heading_rate_radps\n";
   char buf[256];
   for (const auto& h : health) {
-    std::snprintf(buf, sizeof buf, "%.1f,%.2f,%.4f,%.3f,%.4f,%zu,%ld,%s\n", h.t_s, h.rss_mb, h.tick_mean_ms, h.tick_max_ms,
-                  h.step_mean_ms, h.grid_cells, h.submaps, h.explorer_state.c_str());
+    std::snprintf(buf, sizeof buf, "%.1f,%.2f,%.4f,%.3f,%.4f,%zu,%ld,%s,%.4e\n", h.t_s, h.rss_mb, h.tick_mean_ms, h.tick_max_ms,
+                  h.step_mean_ms, h.grid_cells, h.submaps, h.explorer_state.c_str(), h.heading_rate_radps);
     text += buf;
   }
   write_text_file(path, text);

@@ -529,4 +529,32 @@ TEST(SimChassis, InvalidSettingsAndArgumentsThrow) {
   EXPECT_EQ(c.true_twist().v, 0.0f);
 }
 
+
+// The gyro's bias (ChassisSimSettings::gyro_bias_std_radps) as SimChassis::gyro_bias() reports
+// it - the truth summary.json's gyro_bias_true_radps gives: a robot standing still with the gyro
+// heading and no noise sees its odometry's heading turn at exactly that rate; without the gyro
+// heading, or with a std of 0, it is 0; the draw follows the seed.
+TEST(SimChassis, GyroBiasIsTheRateTheStillOdometryTurnsAt) {
+  ChassisSimSettings s = ideal();
+  s.gyro_heading = true;
+  s.gyro_bias_std_radps = 1e-3f;
+  float first = 0.0f;
+  for (std::uint64_t seed : {1u, 2u}) {
+    s.seed = seed;
+    SimChassis c(open_world(), s, Pose2{0.0f, 0.0f, 0.0f});
+    ASSERT_NE(c.gyro_bias(), 0.0f);
+    EXPECT_LT(std::fabs(c.gyro_bias()), 5e-3f);  // 5 std
+    if (seed == 1) first = c.gyro_bias();
+    else EXPECT_NE(c.gyro_bias(), first);  // another seed, another bias
+    c.advance(10.0);
+    EXPECT_NEAR(c.take_odometry().back().pose.theta, 10.0 * c.gyro_bias(), 1e-5);
+    EXPECT_EQ(c.true_pose().theta, 0.0f);
+  }
+  s.gyro_bias_std_radps = 0.0f;
+  EXPECT_EQ(SimChassis(open_world(), s, Pose2{}).gyro_bias(), 0.0f);
+  ChassisSimSettings wheels = ideal();  // heading from the wheels: no gyro
+  wheels.gyro_bias_std_radps = 1e-3f;
+  EXPECT_EQ(SimChassis(open_world(), wheels, Pose2{}).gyro_bias(), 0.0f);
+}
+
 }  // namespace test_sim_chassis

@@ -246,6 +246,7 @@ void SimExplore::sample_health(double tick_s, double step_s) {
   if (settings_.runtime.execution == Execution::kLockstep || reason_ != StopReason::kRunning)
     h.submaps = static_cast<long>(runtime_->mapper().submaps().size());
   h.explorer_state = duet::to_string(runtime_->state());
+  h.heading_rate_radps = runtime_->heading_rate();
   health_.push_back(std::move(h));
   tick_sum_s_ = tick_max_s_ = step_sum_s_ = 0.0;
   health_periods_ = 0;
@@ -338,6 +339,8 @@ ExploreSummary SimExplore::summary() const {
   s.pose_error_m = std::hypot(est.x - tp.x, est.y - tp.y);
   s.pose_error_max_m = pose_error_max_;
   s.heading_error_deg = std::fabs(std::remainder(est.theta - tp.theta, 2.0 * std::numbers::pi)) * 180.0 / std::numbers::pi;
+  s.heading_rate_radps = runtime_->heading_rate();
+  s.gyro_bias_radps = robot_.sim_chassis().gyro_bias();
   s.scan_matches = rs.scan_matches;
   s.scan_match_rejected = rs.scan_match_rejected;
   s.scan_match_time_s = rs.scan_match_time_s;

@@ -63,7 +63,8 @@ class PoseCorrector {
 
   /// map <- odometry (identity until a match is accepted).
   [[nodiscard]] const Pose2& correction() const noexcept { return correction_; }
-  /// The estimated drift rate of the odometry's heading [rad/s].
+  /// The rate the correction adds to the odometry's heading [rad/s]: minus the odometry
+  /// heading's drift (a gyro's bias) when the estimate is right.
   [[nodiscard]] float heading_rate() const noexcept { return heading_rate_; }
   [[nodiscard]] std::size_t matches() const noexcept { return matches_; }
   [[nodiscard]] std::size_t rejected() const noexcept { return rejected_; }

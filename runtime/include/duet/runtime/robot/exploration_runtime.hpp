@@ -142,7 +142,8 @@ class ExplorationRuntime {
   [[nodiscard]] const Pose2& correction() const noexcept { return correction_; }
   /// Visual odometry's health (localization.visual_odometry on), else nullopt.
   [[nodiscard]] std::optional<LocalizationHealth> localization_health() const noexcept;
-  /// The estimated drift rate of the odometry's heading [rad/s].
+  /// The rate the pose correction adds to the odometry's heading [rad/s] (PoseCorrector::
+  /// heading_rate()): minus the odometry heading's drift (a gyro's bias) when it is right.
   [[nodiscard]] float heading_rate() const noexcept { return heading_rate_; }
   [[nodiscard]] const Twist& last_command() const noexcept { return last_cmd_; }
   /// The goal the controller follows and its path (map frame; none / empty without a goal).

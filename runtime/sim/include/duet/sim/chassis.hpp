@@ -155,6 +155,9 @@ class SimChassis final : public ChassisInterface {
   [[nodiscard]] Twist true_twist() const noexcept { return true_twist_; }
   /// The odometry pose at the last physics step (not only at the messages).
   [[nodiscard]] const Pose2& odometry_pose() const noexcept { return odom_pose_; }
+  /// This run's constant gyro bias [rad/s] (0 without gyro_heading): the truth an estimate of
+  /// the odometry heading's drift is measured against.
+  [[nodiscard]] float gyro_bias() const noexcept { return settings_.gyro_heading ? gyro_bias_ : 0.0f; }
   /// Collisions (contact onsets) so far.
   [[nodiscard]] std::size_t collisions() const noexcept { return collisions_; }
   /// True while the robot touches an obstacle (between a collision and the contact's end).
