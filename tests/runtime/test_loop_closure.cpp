@@ -187,6 +187,9 @@ TEST(LoopClosure, AnAliasDoesNotMoveAPoseTheOldMapDoesNotContradict) {
     es.max_time_s = 250.0;
     es.runtime = profile.runtime;
     es.runtime.explorer.frontier_seen_radius_m = 0.3f;
+    // The heading-rate gains of the run that met the alias (the profile's until stop 50).
+    es.runtime.pose_correction.rate_gain_initial = PoseCorrectionSettings{}.rate_gain_initial;
+    es.runtime.pose_correction.rate_gain = PoseCorrectionSettings{}.rate_gain;
     if (!checked) es.runtime.loop_closure.min_prediction_conflict = 0.0f;
     sim::SimExplore run(sim::builtin_world("lab"), profile, es);
     run.run();

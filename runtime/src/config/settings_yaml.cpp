@@ -165,14 +165,18 @@ void validated(Reader& r, std::initializer_list<std::pair<std::string, YAML::Nod
     const std::string msg = e.what();
     static const std::regex field(R"(^[A-Za-z]+(?:::|\.)\s*([a-z_0-9]+)\b)");
     std::smatch m;
-    if (std::regex_search(msg, m, field)) {
-      const std::string key = m[1].str();
+    auto name_key = [&](const std::string& key) {
       for (const auto& [path, node] : where) {
         YAML::Node n;
         std::string p;
         if (find_key(node, path, key, n, p)) r.invalid(n, p, msg);
       }
-    }
+    };
+    if (std::regex_search(msg, m, field)) name_key(m[1].str());
+    // A check across fields ("min_height_m < max_height_m ...") names the first; the value at
+    // fault may be another one the message names: the first of them the sections hold.
+    static const std::regex other(R"(\b([a-z][a-z0-9]*_[a-z_0-9]+)\b)");
+    for (auto it = std::sregex_iterator(msg.begin(), msg.end(), other); it != std::sregex_iterator(); ++it) name_key((*it)[1].str());
     const auto& [path, node] = *where.begin();
     if (node) r.invalid(node, path, msg);
     fail(ErrorCode::kInvalidArgument, r.locator().source() + ": " + path + ": " + msg);
