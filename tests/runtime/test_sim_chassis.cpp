@@ -529,7 +529,6 @@ TEST(SimChassis, InvalidSettingsAndArgumentsThrow) {
   EXPECT_EQ(c.true_twist().v, 0.0f);
 }
 
-
 // The gyro's bias (ChassisSimSettings::gyro_bias_std_radps) as SimChassis::gyro_bias() reports
 // it - the truth summary.json's gyro_bias_true_radps gives: a robot standing still with the gyro
 // heading and no noise sees its odometry's heading turn at exactly that rate; without the gyro

@@ -92,7 +92,7 @@ struct HealthSample {
   std::size_t grid_cells = 0;     ///< cells of the map grid
   long submaps = -1;              ///< the mapper's submaps (-1: not readable while a background task runs)
   std::string explorer_state;     ///< the explorer's state at the end of the window
-  double heading_rate_radps = 0.0;  ///< the runtime's estimate of the odometry heading's drift [rad/s]
+  double heading_rate_radps = 0.0;  ///< the rate the pose correction adds to the odometry's heading (minus its estimated drift) [rad/s]
 };
 
 struct CurvePoint {
@@ -139,7 +139,7 @@ struct ExploreSummary {
   double pose_error_m = 0.0;             ///< |pose estimate (corrected odometry) - truth| at the end [m]
   double pose_error_max_m = 0.0;         ///< max over the run of |pose estimate - truth| [m]
   double heading_error_deg = 0.0;        ///< |pose estimate's heading - truth's| at the end [deg]
-  double heading_rate_radps = 0.0;       ///< the runtime's estimate of the odometry heading's drift at the end [rad/s]
+  double heading_rate_radps = 0.0;       ///< the rate the pose correction adds to the odometry's heading at the end (minus its estimated drift) [rad/s]
   double gyro_bias_radps = 0.0;          ///< the simulated gyro's true bias (0 without a gyro) [rad/s]
   bool visual_odometry = false;          ///< localization.visual_odometry was on
   VisualLocalizationStats visual;        ///< its counters
