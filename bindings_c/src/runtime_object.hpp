@@ -80,6 +80,7 @@ struct Runtime final : Object {
   std::size_t last_matches = 0, last_rejects = 0, last_relocs = 0, last_sets = 0;
   double last_reloc_t = -1e300;  ///< runtime time of the last relocalisation
   std::uint64_t periods = 0;
+  int map_readers = 0;  ///< read_drained() calls holding the map updates (two readers at once: the first to finish must not let go)
 
   /// One control period at your clock's `now` (lock `run` held). Appends the event lines to
   /// deliver (after the lock is released) to `events`.
@@ -130,14 +131,14 @@ void Runtime::read_drained(F&& read) {
   {
     std::lock_guard lock(run);
     rt_seen = rt.get();
-    if (rt_seen) rt_seen->hold_map_updates(true);
+    if (rt_seen && map_readers++ == 0) rt_seen->hold_map_updates(true);
   }
   if (!rt_seen) return;
   struct Release {
     Runtime& r;
     ~Release() {
       std::lock_guard lock(r.run);
-      r.rt->hold_map_updates(false);
+      if (--r.map_readers == 0) r.rt->hold_map_updates(false);  // the last reader lets go
     }
   } release{*this};
   rt_seen->wait_background_idle();  // without the lock: control goes on

@@ -305,7 +305,10 @@ void voxel_filter(PointsView points, ColorsView colors, const VoxelFilterSetting
   //    bounds pass: the cells' range is found from the distinct cells afterwards).
   const std::size_t nb = detail::block_count(n, kBlock);
   if (ws.blocks.size() < nb) ws.blocks.resize(nb);
-  const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
+  // One table per thread index. current_thread_index() can equal max_concurrency(): oneTBB
+  // gives an arena with a reserved slot at least two slots, the second for a worker that runs
+  // work enqueued into it, so a call into a busy one-thread arena runs at index 1.
+  const auto threads = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()) + 1;
   if (ws.tables.size() < threads) ws.tables.resize(threads);
   for (Table& t : ws.tables)
     if (t.slots.empty()) table_resize(t, 1024);
@@ -313,6 +316,9 @@ void voxel_filter(PointsView points, ColorsView colors, const VoxelFilterSetting
     Block& m = ws.blocks[b];
     m.out_of_range = false;
     const auto thread = static_cast<std::size_t>(tbb::this_task_arena::current_thread_index());
+    if (thread >= ws.tables.size()) [[unlikely]]
+      fail(ErrorCode::kInternal, "voxel_filter: thread index " + std::to_string(thread) + " beyond the " +
+                                     std::to_string(ws.tables.size()) + " per-thread tables");
     accumulate_block(points, colors, inv, begin, end, ws.tables[thread], m);
   });
 

@@ -111,6 +111,104 @@ TEST_F(CapiRuntimeThreads, PushFromThreeThreadsWhileTheRuntimeRunsItsOwnThread) 
   EXPECT_EQ(take(), DUET_ERROR_NONE) << message();
 }
 
+// The ROS node's threads on a device of threads=1: one thread copies the grid (in the device's
+// arena) while a service thread saves and the publishing thread reads the cloud. A save that
+// finds the arena's one slot busy runs on the worker of its second slot (thread index 1): the
+// voxel filter's per-thread tables once wrote past their end there (a SIGSEGV in the node under
+// ThreadSanitizer, CI stop 50; VoxelFilter.RunsOnTheSecondSlotOfAOneThreadArena is the
+// deterministic test). Two readers of the map at once: the map updates stay held until both are
+// done.
+TEST_F(CapiRuntimeThreads, SaveAndCloudWhileAnotherThreadCopiesTheGrid) {
+  const char* sets[] = {"runtime.background_threads=1", "runtime.sensor_rate_hz=5"};
+  duet_runtime rt = duet_runtime_new(device_, DUET_PROFILE_NAME_OR_FILE, "dual", sets, 2, 2);
+  ASSERT_NE(rt, nullptr) << message();
+  static std::atomic<int> errors{0};  // every error on the device, whichever thread met it
+  errors = 0;
+  duet_device_set_error_callback(device_, [](void*, duet_error, const char* m) {
+    ++errors;
+    ADD_FAILURE() << m;
+  }, nullptr);
+  duet_runtime_start(rt, nullptr, nullptr);
+  ASSERT_EQ(take(), DUET_ERROR_NONE) << message();
+  std::atomic<bool> stop{false};
+  std::atomic<std::size_t> copies{0}, clouds{0};
+  std::thread feed([&] {
+    std::vector<uint16_t> depth(640 * 480, 1500);  // a wall 1.5 m ahead
+    int n = 0;
+    while (!stop.load()) {
+      for (size_t sensor = 0; sensor < 2 && n % 8 == 0; ++sensor) {
+        duet_rgbd_image im;
+        duet_rgbd_image_init(&im);
+        im.stamp_s = duet_time_now();
+        im.depth = depth.data();
+        im.width = 640;
+        im.height = 480;
+        duet_runtime_push_rgbd(rt, sensor, &im);
+      }
+      duet_runtime_push_odometry(rt, duet_time_now(), duet_pose2{0, 0, 0}, duet_twist{0, 0});
+      ++n;
+      std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    }
+  });
+  duet_runtime_stats st0{};
+  for (int i = 0; i < 400 && st0.control_periods == 0; ++i) {  // the grid and the cloud exist from the first period
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    duet_runtime_get_stats(rt, &st0);
+  }
+  ASSERT_GT(st0.control_periods, 0u);
+  std::thread grids([&] {
+    std::vector<float> p;
+    while (!stop.load()) {
+      duet_grid g = duet_runtime_get_grid(rt);
+      if (g == nullptr) continue;
+      p.resize(static_cast<std::size_t>(duet_grid_get_width(g)) * static_cast<std::size_t>(duet_grid_get_height(g)));
+      for (int k = 0; k < 20 && !p.empty(); ++k) {
+        duet_grid_copy_probabilities(g, p.data(), p.size());  // in the device's arena
+        ++copies;
+      }
+      duet_grid_release(g);
+    }
+  });
+  std::thread cloud_reader([&] {
+    while (!stop.load()) {
+      duet_cloud c = duet_runtime_get_cloud(rt);
+      if (c != nullptr) ++clouds;
+      duet_cloud_release(c);
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  });
+  const auto dir = std::filesystem::temp_directory_path() / ("duet_capi_threads_save2_" + std::to_string(::getpid()));
+  std::size_t saves = 0;
+  const double t_end = duet_time_now() + 4.0;
+  while (duet_time_now() < t_end) {
+    duet_runtime_stats st;
+    duet_runtime_get_stats(rt, &st);
+    if (st.sets_integrated >= 1) {
+      duet_runtime_save(rt, dir.string().c_str());
+      ++saves;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  stop.store(true);
+  feed.join();
+  grids.join();
+  cloud_reader.join();
+  duet_runtime_join(rt);
+  EXPECT_EQ(take(), DUET_ERROR_NONE) << message();
+  EXPECT_EQ(errors.load(), 0);
+  EXPECT_GE(saves, 3u);
+  EXPECT_GT(copies.load(), 10u);
+  EXPECT_GT(clouds.load(), 10u);
+  EXPECT_TRUE(std::filesystem::is_regular_file(dir / "cloud.pcd"));
+  duet_cloud last = duet_runtime_get_cloud(rt);
+  EXPECT_GT(duet_cloud_get_size(last), 0u);
+  duet_cloud_release(last);
+  std::filesystem::remove_all(dir);
+  duet_runtime_release(rt);
+  EXPECT_EQ(take(), DUET_ERROR_NONE) << message();
+  duet_device_set_error_callback(device_, nullptr, nullptr);
+}
+
 TEST_F(CapiRuntimeThreads, ReleasedFromItsOwnEventCallback) {
   // The last reference dropped on the runtime's own thread (its event callback): the thread
   // ends by itself and frees the runtime - no join of a thread by itself, no use after free.

@@ -7,10 +7,14 @@
 #include <duet/kernels/voxel_filter.hpp>
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <limits>
 
 #include <array>
+#include <atomic>
+#include <chrono>
+#include <thread>
 #include <cstdio>
 #include <cstring>
 #include <map>
@@ -382,6 +386,48 @@ TEST(VoxelFilter, IdenticalWithOneAndTwoThreads) {
     EXPECT_GT(a.size(), 1000u);
     EXPECT_TRUE(test::bitwise_equal(a, b));
   }
+}
+
+// oneTBB gives an arena with a reserved slot at least two slots, the second for a worker that
+// runs work enqueued into it: a call into a one-thread arena whose one thread is busy runs on
+// that worker, at thread index 1, although max_concurrency() is 1. The C API met this (a
+// device of threads=1: duet_runtime_save while another thread converted a grid): the
+// per-thread tables were sized by max_concurrency() and index 1 wrote past them (a SIGSEGV in
+// the ROS node under ThreadSanitizer, CI stop 50).
+TEST(VoxelFilter, RunsOnTheSecondSlotOfAOneThreadArena) {
+  const PointCloud c = random_cloud(100000, 61, -2.0f, 2.0f, 0.05f);
+  const VoxelFilterSettings s;
+  PointCloud expected;
+  voxel_filter(c.points_view(), c.colors_view(), s, expected);
+  tbb::task_arena arena(1);
+  std::atomic<bool> inside{false}, release{false}, done{false};
+  std::thread busy([&] {
+    arena.execute([&] {
+      inside = true;
+      while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    });
+  });
+  while (!inside) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  int index = -1;
+  PointCloud out;
+  VoxelFilterWorkspace ws;  // fresh: its tables are sized by this call
+  std::thread caller([&] {
+    arena.execute([&] {
+      index = tbb::this_task_arena::current_thread_index();
+      voxel_filter(c.points_view(), c.colors_view(), s, ws, out);
+    });
+    done = true;
+  });
+  // The busy thread is let go after 20 s at the latest, should the call wait for it after all.
+  for (int i = 0; i < 20000 && !done; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  const bool ran_beside_busy = done.load();
+  release = true;
+  caller.join();
+  busy.join();
+  EXPECT_TRUE(ran_beside_busy) << "the call waited for the arena's busy thread";
+  EXPECT_EQ(index, 1) << "the call ran at thread index " << index << ", not the arena's second slot";
+  EXPECT_GT(out.size(), 1000u);
+  EXPECT_TRUE(test::bitwise_equal(out, expected));
 }
 
 TEST(VoxelFilter, RealSlambookFrameMatchesReference) {
