@@ -269,8 +269,13 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
     in.now_s = now_s;
     in.override_pose = pose_override_;
     in.odometry_confirmed = visual_ && visual_->confirms_odometry(now_s);
-    if (visual_) {  // vision saw a jump the wheels did not make since the last map update
-      in.odometry_contradicted = visual_->stats().gated > visual_gated_seen_;
+    // The pose may be off: the robot stalled against something where its map shows free floor
+    // (orebro seed 2, stop 51: 0.25 m off on returning to the start, it hit a wall twice, 14 s
+    // apart, before a loop closure moved it), or vision saw a jump the wheels did not make.
+    in.odometry_contradicted = stalled_since_map_;
+    stalled_since_map_ = false;
+    if (visual_) {
+      in.odometry_contradicted = in.odometry_contradicted || visual_->stats().gated > visual_gated_seen_;
       visual_gated_seen_ = visual_->stats().gated;
     }
     while (next_map_t_ <= stamp + 1e-9) next_map_t_ += 1.0 / settings_.map_rate_hz;
@@ -338,6 +343,11 @@ void ExplorationRuntime::tick(double now_s) {
   }
   explorer_.controller().set_localization_health(health_, now_s);
   last_cmd_ = worker_ ? explorer_.controller().control(pose_, odom_twist_, now_s, *link_) : explorer_.control(pose_, odom_twist_, now_s);
+  if (!worker_) {  // kLockstep: the explorer's own link told the navigator of a stall (kBackground: ours sets the flag)
+    const int stalls = explorer_.navigator().stats().stalls;
+    if (stalls > stalls_seen_) stalled_since_map_ = true;
+    stalls_seen_ = stalls;
+  }
   if (stop_asked_) last_cmd_ = Twist{0.0f, 0.0f};  // kBackground: until the navigator has heard
   if (blind) {
     last_cmd_ = Twist{0.0f, 0.0f};

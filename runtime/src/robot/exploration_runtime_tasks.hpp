@@ -43,7 +43,7 @@ struct ExplorationRuntime::MapInput {
   double now_s = 0.0;
   std::optional<Pose2> override_pose;
   bool odometry_confirmed = false;  ///< visual odometry's health was good (PoseCorrector::confirm_odometry)
-  bool odometry_contradicted = false;  ///< vision gated out a jump since the last update (PoseCorrector::contradict_odometry)
+  bool odometry_contradicted = false;  ///< a stall, or vision gated out a jump, since the last update (PoseCorrector::contradict_odometry)
 };
 
 /// What a background task hands to the control thread.
@@ -88,6 +88,7 @@ class ExplorationRuntime::Link final : public GoalLink {
   void stall(const Eigen::Vector2f& contact, double now_s) override {
     if (rt_.plan_ && rt_.plan_->goal) dropped_goal_id_ = std::max(dropped_goal_id_, rt_.plan_->goal_id);
     stall_pending_ = true;
+    rt_.stalled_since_map_ = true;  // the next map update re-matches the pose wide
     post({Event::Kind::kStall, contact, 0, AbandonReason::kStuck, now_s});
   }
   void decide(const Pose2& robot, double now_s) override { rt_.submit_decision(robot, now_s); }

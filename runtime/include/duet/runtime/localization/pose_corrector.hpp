@@ -55,8 +55,9 @@ class PoseCorrector {
   /// update matches its scan over the wide window at once, before the scan is integrated where
   /// it may not belong, instead of waiting for the matcher to grow suspicious (it may not: a
   /// kidnapped robot's first scan can fit the map it is wrongly placed in, lab kidnap seed 2). The
-  /// wide match moves the pose only when it explains the scan clearly better than the
-  /// prediction, as always. Counted in relocalizations_asked().
+  /// ExplorationRuntime also asks after a stall: the robot drove into something where its map
+  /// shows free floor. The wide match moves the pose only when it explains the scan clearly
+  /// better than the prediction, as always. Counted in relocalizations_asked().
   void contradict_odometry() noexcept { relocalize_asked_ = true; }
   /// The map frame moved by D (loop closure): the correction moves with it, the reference map is dropped.
   void shift(const Pose2& D);
