@@ -202,8 +202,8 @@ TEST(PoseCorrectorHold, AKidnappedRobotWithVisionIsStillRelocalised) {
 }
 
 // A stall asks for a wide re-match too: the robot drove into something where its map shows free
-// floor, so its pose may be off (orebro seed 2, stop 51: 0.25 m off on coming back to its start,
-// it hit a wall twice, 14 s apart, before a loop closure moved it). Here the pose is right and
+// floor, so its pose may be off (a wrong pose is moved if the current grid holds a clearly
+// better fit; orebro seed 2 at stop 51 was not: its drifted walls had been mapped again). Here the pose is right and
 // the obstacle is one the map does not hold (a 2 cm sill, which the sensors take for floor):
 // the runtime asks at each stall, and the wide re-match, which moves the pose only for a clearly
 // better fit, leaves it where it is (AContradictedOdometryIsRelocalisedAtTheNextUpdate: a wrong

@@ -269,9 +269,11 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
     in.now_s = now_s;
     in.override_pose = pose_override_;
     in.odometry_confirmed = visual_ && visual_->confirms_odometry(now_s);
-    // The pose may be off: the robot stalled against something where its map shows free floor
-    // (orebro seed 2, stop 51: 0.25 m off on returning to the start, it hit a wall twice, 14 s
-    // apart, before a loop closure moved it), or vision saw a jump the wheels did not make.
+    // The pose may be off: the robot stalled against something where its map shows free floor,
+    // or vision saw a jump the wheels did not make. (orebro seed 2, stop 51: back at its start
+    // 0.25 m off, it hit a wall twice; the wide match asked then found no clearly better fit -
+    // the drifted walls had been mapped again - and a loop closure against the old submaps
+    // moved the pose 5 s later.)
     in.odometry_contradicted = stalled_since_map_;
     stalled_since_map_ = false;
     if (visual_) {
