@@ -273,7 +273,7 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
     // or vision saw a jump the wheels did not make. (orebro seed 2, stop 51: back at its start
     // 0.25 m off, it hit a wall twice; the wide match asked then found no clearly better fit -
     // the drifted walls had been mapped again - and a loop closure against the old submaps
-    // moved the pose 5 s later.)
+    // moved the pose.)
     in.odometry_contradicted = stalled_since_map_;
     stalled_since_map_ = false;
     if (visual_) {
