@@ -21,6 +21,17 @@ using duet_capi_test::DeviceTest;
 // run lock, written outside it while control goes on): part of the ThreadSanitizer pass.
 // One-thread arenas (device and background): Debian's TBB is not instrumented, so TSan would
 // take its parallel loops for races (scripts/test.sh).
+// One 640 x 480 depth frame (millimetres), stamped now, to `sensor`.
+void push_depth(duet_runtime rt, size_t sensor, const std::vector<uint16_t>& depth) {
+  duet_rgbd_image im;
+  duet_rgbd_image_init(&im);
+  im.stamp_s = duet_time_now();
+  im.depth = depth.data();
+  im.width = 640;
+  im.height = 480;
+  duet_runtime_push_rgbd(rt, sensor, &im);
+}
+
 class CapiRuntimeThreads : public DeviceTest {
  protected:
   void SetUp() override {
@@ -46,13 +57,7 @@ TEST_F(CapiRuntimeThreads, PushFromThreeThreadsWhileTheRuntimeRunsItsOwnThread) 
   auto camera = [&](size_t sensor) {
     std::vector<uint16_t> depth(640 * 480, static_cast<uint16_t>(1500 + 500 * sensor));
     while (!stop.load()) {
-      duet_rgbd_image im;
-      duet_rgbd_image_init(&im);
-      im.stamp_s = duet_time_now();
-      im.depth = depth.data();
-      im.width = 640;
-      im.height = 480;
-      duet_runtime_push_rgbd(rt, sensor, &im);
+      push_depth(rt, sensor, depth);
       std::this_thread::sleep_for(std::chrono::milliseconds(200));
     }
   };
@@ -137,13 +142,7 @@ TEST_F(CapiRuntimeThreads, SaveAndCloudWhileAnotherThreadCopiesTheGrid) {
     int n = 0;
     while (!stop.load()) {
       for (size_t sensor = 0; sensor < 2 && n % 8 == 0; ++sensor) {
-        duet_rgbd_image im;
-        duet_rgbd_image_init(&im);
-        im.stamp_s = duet_time_now();
-        im.depth = depth.data();
-        im.width = 640;
-        im.height = 480;
-        duet_runtime_push_rgbd(rt, sensor, &im);
+        push_depth(rt, sensor, depth);
       }
       duet_runtime_push_odometry(rt, duet_time_now(), duet_pose2{0, 0, 0}, duet_twist{0, 0});
       ++n;

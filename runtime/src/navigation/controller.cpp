@@ -24,6 +24,7 @@ void Controller::shift(const Pose2& D) { cornered_.shift(D); }
 Twist Controller::control(const Pose2& robot, const Twist& current, double now_s, GoalLink& link) {
   // Stall: driving forward, the odometry measures no motion - a contact the sensors cannot see.
   if (const std::optional<Eigen::Vector2f> contact = stall_.update(last_cmd_, current, robot, now_s)) {
+    ++stats_.stalls;
     link.stall(*contact, now_s);
     last_cmd_ = Twist{};
     return last_cmd_;

@@ -274,8 +274,8 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
     // 0.25 m off, it hit a wall twice; the wide match asked then found no clearly better fit -
     // the drifted walls had been mapped again - and a loop closure against the old submaps
     // moved the pose.)
-    in.odometry_contradicted = stalled_since_map_;
-    stalled_since_map_ = false;
+    in.odometry_contradicted = explorer_.controller().stats().stalls > stalls_seen_;
+    stalls_seen_ = explorer_.controller().stats().stalls;
     if (visual_) {
       in.odometry_contradicted = in.odometry_contradicted || visual_->stats().gated > visual_gated_seen_;
       visual_gated_seen_ = visual_->stats().gated;
@@ -345,11 +345,6 @@ void ExplorationRuntime::tick(double now_s) {
   }
   explorer_.controller().set_localization_health(health_, now_s);
   last_cmd_ = worker_ ? explorer_.controller().control(pose_, odom_twist_, now_s, *link_) : explorer_.control(pose_, odom_twist_, now_s);
-  if (!worker_) {  // kLockstep: the explorer's own link told the navigator of a stall (kBackground: ours sets the flag)
-    const int stalls = explorer_.navigator().stats().stalls;
-    if (stalls > stalls_seen_) stalled_since_map_ = true;
-    stalls_seen_ = stalls;
-  }
   if (stop_asked_) last_cmd_ = Twist{0.0f, 0.0f};  // kBackground: until the navigator has heard
   if (blind) {
     last_cmd_ = Twist{0.0f, 0.0f};

@@ -88,7 +88,6 @@ class ExplorationRuntime::Link final : public GoalLink {
   void stall(const Eigen::Vector2f& contact, double now_s) override {
     if (rt_.plan_ && rt_.plan_->goal) dropped_goal_id_ = std::max(dropped_goal_id_, rt_.plan_->goal_id);
     stall_pending_ = true;
-    rt_.stalled_since_map_ = true;  // the next map update re-matches the pose wide
     post({Event::Kind::kStall, contact, 0, AbandonReason::kStuck, now_s});
   }
   void decide(const Pose2& robot, double now_s) override { rt_.submit_decision(robot, now_s); }

@@ -55,6 +55,7 @@ class GoalLink {
 
 /// Counters of the controller's behaviours (merged into ExplorerStats).
 struct ControllerStats {
+  int stalls = 0;            ///< stalls detected (contacts passed to GoalLink::stall)
   int local_fallbacks = 0;   ///< periods the dynamic window fell back to the planning grid
   int escapes = 0;           ///< periods spent escaping the dynamic window's margin
   int cornered_escapes = 0;  ///< periods spent escaping a spot (cornered_after_s)

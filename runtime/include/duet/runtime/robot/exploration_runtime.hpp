@@ -214,10 +214,9 @@ class ExplorationRuntime {
   std::optional<LocalizationHealth> health_;
   double last_visual_t_ = -1.0;  ///< stamp of the last set vision tracked
   std::size_t visual_gated_seen_ = 0;  ///< vision's gated jumps already passed to the pose correction
-  /// A stall since the last map update was submitted (control thread): the robot drove into something
-  /// where its map shows free floor, so the pose may be off - the next update re-matches wide.
-  bool stalled_since_map_ = false;
-  int stalls_seen_ = 0;  ///< kLockstep: the navigator's stalls already noted in stalled_since_map_
+  /// The controller's stalls already passed to a map update (a stall since: the robot drove into
+  /// something where its map shows free floor, so the pose may be off - the update re-matches wide).
+  int stalls_seen_ = 0;
   double last_now_s_ = 0.0;     ///< the last tick's time
   InputGuard guard_;
   ApproximateTimeCore sync_;
