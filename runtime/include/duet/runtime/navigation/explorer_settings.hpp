@@ -121,10 +121,9 @@ struct ExplorerSettings {
   /// sweeps frontiers the robot drives by), so driving on to it and turning there would show
   /// nothing new, and the robot decides again at once (explore_lite re-plans the same way when
   /// its goal's frontier disappears). [m], [0, 5]; 0 = off: drive to every frontier goal and
-  /// look from there. The struct's default is off; the two Kobuki profiles set 0.3 m: with eps_R
-  /// at 12 bits a third of the time to 90 % went to frontier goals, at a quarter of the simulated
-  /// goals' gain per second, and 0.3 m reached 90 % 4-30 % sooner on five buildings and the lab
-  /// (bench/RESULTS.md, stop 52).
+  /// look from there. The struct's default is off; the two Kobuki profiles set 0.3 m, because a
+  /// frontier goal gains far less per second than a simulated goal and most of its drive is
+  /// spent after its frontier was already seen (figures: bench/RESULTS.md, stop 55).
   float frontier_seen_radius_m = 0.0f;
   /// The cells wholly under the robot's body at its estimated pose are not obstacles in the
   /// costmaps (footprint_layer.hpp; the map keeps them): a pose a few centimetres off must not
