@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <numbers>
 
@@ -14,7 +13,8 @@ ViewGoal::ViewGoal(const Profile& profile, const ExplorerSettings& settings)
     : GoalStrategy(settings),
       frontier_(profile.exploration.strategy.frontier),
       settings_(settings),
-      cells_(profile.exploration.cells) {}
+      cells_(profile.exploration.cells),
+      budget_(settings.view_min_gain_m2, settings.view_gain_window_s) {}
 
 void ViewGoal::map_updated(const GridView& latest, bool) {
   if (dwell_max_s_ < 0.0) return;
@@ -79,39 +79,16 @@ std::size_t known_cells(const GridView& g, const CellThresholds& t) {
 }
 }  // namespace
 
-bool ViewGoal::within_budget(const GoalQuery& q) {
-  if (!(settings_.view_min_gain_m2 > 0.0f)) return true;
-  if (!stop_note_.empty()) return false;
-  if (window_start_s_ < 0.0) {  // a phase of looking only begins
-    window_start_s_ = q.now_s;
-    window_known_ = known_cells(q.latest, cells_);
-    return true;
-  }
-  if (q.now_s - window_start_s_ < static_cast<double>(settings_.view_gain_window_s)) return true;
-  const std::size_t known = known_cells(q.latest, cells_);
-  const double cell_m2 = static_cast<double>(q.latest.resolution_m) * static_cast<double>(q.latest.resolution_m);
-  const double gain_m2 = (static_cast<double>(known) - static_cast<double>(window_known_)) * cell_m2;
-  if (gain_m2 < static_cast<double>(settings_.view_min_gain_m2)) {
-    char buf[200];
-    std::snprintf(buf, sizeof buf, "looking at them from view goals added %.1f m^2 in the last %.0f s (view_min_gain_m2 %.1f)", gain_m2,
-                  q.now_s - window_start_s_, static_cast<double>(settings_.view_min_gain_m2));
-    stop_note_ = buf;
-    return false;
-  }
-  window_start_s_ = q.now_s;
-  window_known_ = known;
-  return true;
-}
-
 std::optional<GoalProposal> ViewGoal::propose(GoalQuery& q) {
   const ExplorationDecision& d = q.decision;
   if (d.status != ExplorationStatus::kAllUnreachable && d.status != ExplorationStatus::kAllBlacklisted) {
-    window_start_s_ = -1.0;  // a reachable frontier (or none at all): the looking-only phase is over
-    stop_note_.clear();
+    budget_.frontier_reachable();  // a reachable frontier (or none at all): the looking-only phase is over
     return std::nullopt;
   }
   if (!(settings_.view_range_m > 0.0f)) return std::nullopt;
-  if (!within_budget(q)) return std::nullopt;
+  const double cell_m2 = static_cast<double>(q.latest.resolution_m) * static_cast<double>(q.latest.resolution_m);
+  const std::size_t known = budget_.counts_at(q.now_s) ? known_cells(q.latest, cells_) : 0;
+  if (!budget_.allows(q.now_s, known, cell_m2)) return std::nullopt;
   if (dwell_max_s_ >= 0.0) {  // looking on from where the robot looked again
     if (dwell_changed_) dwell_until_s_ = std::min(dwell_max_s_, q.now_s + 3.0);
     dwell_changed_ = false;

@@ -94,7 +94,7 @@ struct ExplorerSettings {
   /// from max_logodds 3.5 to below the free threshold at -0.4 a miss). A place that does not
   /// change costs 3 s.
   float view_relook_dwell_s = 30.0f;
-  /// The view goals' budget: while every frontier left is unreachable (the robot only looks at
+  /// The view goals' budget (view_budget.hpp): while every frontier left is unreachable (the robot only looks at
   /// them from view goals), the looking ends when the map's known area grew by less than
   /// view_min_gain_m2 over the last view_gain_window_s; the explorer then stops, and its stop
   /// reason says so: each view at a far gap shows a few cells and leaves new ragged frontier

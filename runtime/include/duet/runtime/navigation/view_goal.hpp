@@ -9,10 +9,11 @@
 /// whose view goal was reached or abandoned is looked at again only when no place not yet looked
 /// at is left, at least view_relook_after_s after its last look, and at most view_looks times in
 /// all (a door shut at the first look may be open at the next).
-/// The looking has a budget (ExplorerSettings::view_min_gain_m2): once a window of
-/// view_gain_window_s spent only looking added less known area than that, no more view goals
-/// until a reachable frontier turns up again.
+/// The looking has a budget (ExplorerSettings::view_min_gain_m2, see view_budget.hpp): once a
+/// window of view_gain_window_s spent only looking added less known area than that, no more
+/// view goals until a reachable frontier turns up again.
 #include <duet/runtime/navigation/goal_strategy.hpp>
+#include <duet/runtime/navigation/view_budget.hpp>
 
 namespace duet {
 
@@ -24,7 +25,7 @@ class ViewGoal final : public GoalStrategy {
   void goal_ended(const GoalEnd& end) override;
   void shift(const Pose2& D) override;
   [[nodiscard]] std::vector<Eigen::Vector2f> looked_at() const override;
-  [[nodiscard]] std::string stop_note() const override { return stop_note_; }
+  [[nodiscard]] std::string stop_note() const override { return budget_.note(); }
   void map_updated(const GridView& latest, bool active) override;
 
  private:
@@ -44,12 +45,7 @@ class ViewGoal final : public GoalStrategy {
   bool dwell_changed_ = false;   ///< the last map update added free cells around the target
   Eigen::Vector2f target_{0.0f, 0.0f};
   FrontierWorkspace ws_;
-  // The budget: the window's start (-1: not in a phase of looking only) and the known cells then.
-  double window_start_s_ = -1.0;
-  std::size_t window_known_ = 0;
-  std::string stop_note_;  ///< set when the budget ended the looking
-  /// false: the budget is spent (the looking stops).
-  bool within_budget(const GoalQuery& q);
+  ViewBudget budget_;
 };
 
 }  // namespace duet
