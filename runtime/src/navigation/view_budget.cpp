@@ -11,14 +11,12 @@ bool ViewBudget::counts_at(double now_s) const {
 }
 
 bool ViewBudget::allows(double now_s, std::size_t known_cells, double cell_m2) {
-  if (!(min_gain_m2_ > 0.0f)) return true;
-  if (!note_.empty()) return false;
+  if (!counts_at(now_s)) return !(min_gain_m2_ > 0.0f) || note_.empty();  // off, spent, or within the window
   if (window_start_s_ < 0.0) {  // a phase of looking only begins: so does a window
     window_start_s_ = now_s;
     window_known_ = known_cells;
     return true;
   }
-  if (now_s - window_start_s_ < static_cast<double>(window_s_)) return true;
   const double gain_m2 = (static_cast<double>(known_cells) - static_cast<double>(window_known_)) * cell_m2;
   if (gain_m2 < static_cast<double>(min_gain_m2_)) {
     char buf[200];

@@ -94,11 +94,11 @@ struct ExplorerSettings {
   /// from max_logodds 3.5 to below the free threshold at -0.4 a miss). A place that does not
   /// change costs 3 s.
   float view_relook_dwell_s = 30.0f;
-  /// The view goals' budget (view_budget.hpp): while every frontier left is unreachable (the robot only looks at
-  /// them from view goals), the looking ends when the map's known area grew by less than
-  /// view_min_gain_m2 over the last view_gain_window_s; the explorer then stops, and its stop
-  /// reason says so: each view at a far gap shows a few cells and leaves new ragged frontier
-  /// cells, so without it looking can go on for an hour adding little.
+  /// The view goals' budget (view_budget.hpp): while every frontier left is unreachable (the
+  /// robot only looks at them from view goals), the looking ends when the map's known area grew
+  /// by less than view_min_gain_m2 over the last view_gain_window_s; the explorer then stops, and
+  /// its stop reason says so: each view at a far gap shows a few cells and leaves new ragged
+  /// frontier cells, so without it looking can go on for an hour adding little.
   /// [m^2], [0, 1e6]; 0 = off (look until no place is left to look at).
   float view_min_gain_m2 = 0.0f;
   float view_gain_window_s = 600.0f;  ///< [s], (0, 1e5]
