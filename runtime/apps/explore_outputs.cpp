@@ -89,6 +89,7 @@ nlohmann::json to_json(const sim::ExploreSummary& s) {
                {"relocalizations_new_space", s.relocalizations_new_space},
                {"relocalizations_ambiguous", s.relocalizations_ambiguous},
                {"relocalizations_in_obstacle", s.relocalizations_in_obstacle},
+               {"relocalizations_at_edge", s.relocalizations_at_edge},
                {"relocalizations_asked", s.relocalizations_asked},
                {"scan_match_time_s", s.scan_match_time_s}};
   if (s.visual_odometry)

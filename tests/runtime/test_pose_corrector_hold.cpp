@@ -18,6 +18,7 @@
 
 #include "sanitized.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -32,6 +33,8 @@ struct Kidnap {
   float error_m = 0.0f;  ///< of the last pose the corrector returned, against the truth
   int first_at = -1;     ///< the update after the carry that relocalised first (-1: none)
   RelocalizationScores scores;  ///< of the last relocalisation
+  Pose2 offset;                 ///< the carry: the truth's offset from the odometry (map frame)
+  std::size_t at_edge = 0;      ///< wide re-matches not taken: on the window's edge
 };
 
 /// Every sensor's frame at the robot pose `truth` (frame noise seeded seed + sensor index), viewing
@@ -49,11 +52,12 @@ std::vector<SensorFrame> render_frames(const sim::RgbdRenderer& renderer, const 
 
 /// `confirmed`: confirm_odometry(true) from the carry on; `contradicted`: contradict_odometry()
 /// before the first update after it (vision gated out the jump).
-Kidnap kidnap(bool confirmed, bool contradicted = false, float min_margin = PoseCorrectionSettings{}.relocalize_min_margin,
-              float min_clearance = PoseCorrectionSettings{}.relocalize_min_clearance_m) {
+/// The dual profile's pose correction, the settings the kidnap runs with unless given others.
+PoseCorrectionSettings dual_settings() { return builtin_profile("dual").runtime.pose_correction; }
+
+Kidnap kidnap(bool confirmed, bool contradicted = false, const PoseCorrectionSettings& settings = dual_settings()) {
   Profile profile = builtin_profile("dual");
-  profile.runtime.pose_correction.relocalize_min_margin = min_margin;
-  profile.runtime.pose_correction.relocalize_min_clearance_m = min_clearance;
+  profile.runtime.pose_correction = settings;
   const sim::World world = sim::builtin_world("lab");
   const sim::RgbdRenderer renderer(world);
   Mapper mapper(profile.mapping);
@@ -86,6 +90,8 @@ Kidnap kidnap(bool confirmed, bool contradicted = false, float min_margin = Pose
   const Eigen::Vector2i tc = distance.cell_of(Eigen::Vector2f(truth.x, truth.y));
   Kidnap r{corrector.relocalizations(), corrector.relocalizations_held(), corrector.relocalizations_asked(),
            corrector.relocalizations_ambiguous(), corrector.relocalizations_in_obstacle(), distance.clearance_m[distance.index(tc.x(), tc.y())]};
+  r.at_edge = corrector.relocalizations_at_edge();
+  r.offset = Pose2{truth.x - odom.x, truth.y - odom.y, 0.0f};
   r.error_m = std::hypot(at.x - truth.x, at.y - truth.y);
   r.first_at = first_at;
   r.scores = corrector.last_relocalization_scores();
@@ -113,11 +119,14 @@ TEST(PoseCorrectorHold, AnAmbiguousWideRematchIsNotTaken) {
   ASSERT_GE(plain.relocalizations, 1u);
   const float gap = plain.scores.score - plain.scores.runner_up;
   ASSERT_GT(gap, 0.15f) << "the lab's carry is not a clear relocalisation any more";
-  const Kidnap kept = kidnap(false, false, gap - 0.1f);
+  PoseCorrectionSettings pc = dual_settings();
+  pc.relocalize_min_margin = gap - 0.1f;
+  const Kidnap kept = kidnap(false, false, pc);
   EXPECT_GE(kept.relocalizations, 1u);
   EXPECT_EQ(kept.ambiguous, 0u);
   EXPECT_LT(kept.error_m, 0.15f);
-  const Kidnap refused = kidnap(false, false, gap + 0.05f);
+  pc.relocalize_min_margin = gap + 0.05f;
+  const Kidnap refused = kidnap(false, false, pc);
   EXPECT_EQ(refused.relocalizations, 0u);
   EXPECT_GE(refused.ambiguous, 1u);
   EXPECT_GT(refused.error_m, 0.3f) << "the pose stays with the odometry";
@@ -141,11 +150,14 @@ TEST(PoseCorrectorHold, AWideRematchIntoAnObstacleIsNotTaken) {
   EXPECT_LT(plain.error_m, 0.15f);
   ASSERT_GT(plain.truth_clearance_m, PoseCorrectionSettings{}.relocalize_min_clearance_m);
   ASSERT_LT(plain.truth_clearance_m, 0.95f) << "the lab's carry no longer ends near a wall";
-  const Kidnap refused = kidnap(false, false, PoseCorrectionSettings{}.relocalize_min_margin, plain.truth_clearance_m + 0.05f);
+  PoseCorrectionSettings pc = dual_settings();
+  pc.relocalize_min_clearance_m = plain.truth_clearance_m + 0.05f;
+  const Kidnap refused = kidnap(false, false, pc);
   EXPECT_EQ(refused.relocalizations, 0u);
   EXPECT_GE(refused.in_obstacle, 1u);
   EXPECT_GT(refused.error_m, 0.3f) << "the pose stays with the odometry";
-  const Kidnap off = kidnap(false, false, PoseCorrectionSettings{}.relocalize_min_margin, 0.0f);
+  pc.relocalize_min_clearance_m = 0.0f;
+  const Kidnap off = kidnap(false, false, pc);
   EXPECT_GE(off.relocalizations, 1u);
   EXPECT_EQ(off.in_obstacle, 0u);
   PoseCorrectionSettings bad;
@@ -154,6 +166,40 @@ TEST(PoseCorrectorHold, AWideRematchIntoAnObstacleIsNotTaken) {
   bad.relocalize_min_clearance_m = std::numeric_limits<float>::quiet_NaN();
   EXPECT_THROW(validate(bad), Error);
   bad.relocalize_min_clearance_m = 1.5f;
+  EXPECT_THROW(validate(bad), Error);
+}
+
+// A wide fit on the window's edge is where the window cut the score off, not a peak of it (issue
+// 23, edmonton seed 5: re-matches at -11.0 and +10.8 deg in a +-10 deg window took a right pose
+// 1.0 m off). The carry's larger component put on the lattice's outermost step: the default
+// (half a step) turns the fit down (counted) and the pose stays with the odometry; with the check
+// off (0) the same window relocalises. The default window (1 m) holds the carry well inside.
+TEST(PoseCorrectorHold, AWideRematchOnTheWindowsEdgeIsNotTaken) {
+  const Kidnap plain = kidnap(false);
+  ASSERT_GE(plain.relocalizations, 1u);
+  EXPECT_EQ(plain.at_edge, 0u);
+  EXPECT_LT(plain.error_m, 0.15f);
+  const float step = PoseCorrectionSettings{}.relocalize_step_m;
+  const float c = std::max(std::abs(plain.offset.x), std::abs(plain.offset.y));
+  std::printf("carried by (%.3f, %.3f) m\n", plain.offset.x, plain.offset.y);
+  PoseCorrectionSettings pc = dual_settings();
+  pc.relocalize_window_m = std::floor(c / step) * step;  // the lattice's last step at most a step short of the truth
+  ASSERT_GE(pc.relocalize_window_m, 0.3f);
+  const Kidnap refused = kidnap(false, false, pc);
+  EXPECT_EQ(refused.relocalizations, 0u);
+  EXPECT_GE(refused.at_edge, 1u);
+  EXPECT_GT(refused.error_m, 0.3f) << "the pose stays with the odometry";
+  pc.relocalize_edge_steps = 0.0f;
+  const Kidnap off = kidnap(false, false, pc);
+  EXPECT_GE(off.relocalizations, 1u);
+  EXPECT_EQ(off.at_edge, 0u);
+  EXPECT_LT(off.error_m, 0.15f);
+  PoseCorrectionSettings bad;
+  bad.relocalize_edge_steps = -0.5f;
+  EXPECT_THROW(validate(bad), Error);
+  bad.relocalize_edge_steps = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(validate(bad), Error);
+  bad.relocalize_edge_steps = 6.0f;
   EXPECT_THROW(validate(bad), Error);
 }
 

@@ -368,6 +368,7 @@ ExploreSummary SimExplore::summary() const {
   s.relocalizations_new_space = rs.relocalizations_new_space;
   s.relocalizations_ambiguous = rs.relocalizations_ambiguous;
   s.relocalizations_in_obstacle = rs.relocalizations_in_obstacle;
+  s.relocalizations_at_edge = rs.relocalizations_at_edge;
   s.relocalizations_asked = rs.relocalizations_asked;
   s.occupied_on_obstacles = occupied_on_obstacles();
   return s;

@@ -83,6 +83,7 @@ void fields(V& v, PoseCorrectionSettings& s) {
   v("relocalize_min_margin", s.relocalize_min_margin);
   v("relocalize_distinct_m", s.relocalize_distinct_m);
   v("relocalize_min_clearance_m", s.relocalize_min_clearance_m);
+  v("relocalize_edge_steps", s.relocalize_edge_steps);
   v.section("match", [&](auto& w) { fields(w, s.match); });
 }
 

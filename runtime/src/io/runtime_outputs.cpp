@@ -47,6 +47,7 @@ RuntimeOutputs snapshot_runtime_outputs(ExplorationRuntime& rt, const Trajectory
   j["relocalizations_new_space"] = st.relocalizations_new_space;
   j["relocalizations_ambiguous"] = st.relocalizations_ambiguous;
   j["relocalizations_in_obstacle"] = st.relocalizations_in_obstacle;
+  j["relocalizations_at_edge"] = st.relocalizations_at_edge;
   j["relocalizations_asked"] = st.relocalizations_asked;
   j["frames_received"] = st.frames_received;
   j["frame_drops"] = st.frame_drops;

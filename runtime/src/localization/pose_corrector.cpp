@@ -41,6 +41,8 @@ void validate(const PoseCorrectionSettings& s) {
     bad("relocalize_min_margin must be in [0, 1], got " + std::to_string(s.relocalize_min_margin));
   if (!(s.relocalize_min_clearance_m >= 0.0f && s.relocalize_min_clearance_m <= 1.0f))
     bad("relocalize_min_clearance_m must be in [0, 1] m, got " + std::to_string(s.relocalize_min_clearance_m));
+  if (!(s.relocalize_edge_steps >= 0.0f && s.relocalize_edge_steps <= 5.0f))
+    bad("relocalize_edge_steps must be in [0, 5] lattice steps, got " + std::to_string(s.relocalize_edge_steps));
   if (!in(s.relocalize_distinct_m, 0.0f, 5.0f)) bad("relocalize_distinct_m must be in (0, 5] m, got " + std::to_string(s.relocalize_distinct_m));
 }
 
@@ -191,15 +193,25 @@ Pose2 PoseCorrector::update(const CameraPoints& points, std::span<const SensorFr
       // Another fit elsewhere in the window nearly as good: the scan does not say which.
       const bool ambiguous = clear && pc.relocalize_min_margin > 0.0f && w.score < w.runner_up_score + pc.relocalize_min_margin;
       if (ambiguous) ++relocalizations_ambiguous_;
+      // A fit on the window's edge is where the window cut the score off, not where it peaks.
+      // The edge is the lattice's outermost step (scan_match.cpp: floor(window / step) steps).
+      auto lattice_reach = [](float window, float step) { return std::floor(window / step + 1e-4f) * step; };
+      const float edge_m = lattice_reach(pc.relocalize_window_m, pc.relocalize_step_m) - pc.relocalize_edge_steps * pc.relocalize_step_m;
+      const float edge_rad = (lattice_reach(pc.relocalize_window_deg, pc.relocalize_step_deg) - pc.relocalize_edge_steps * pc.relocalize_step_deg) *
+                             kTwoPi / 360.0f;
+      const bool at_edge = clear && !ambiguous && pc.relocalize_edge_steps > 0.0f &&
+                           (std::abs(w.pose.x - prior.x) >= edge_m || std::abs(w.pose.y - prior.y) >= edge_m ||
+                            std::abs(std::remainder(w.pose.theta - prior.theta, kTwoPi)) >= edge_rad);
+      if (at_edge) ++relocalizations_at_edge_;
       // A fit that puts the robot in a wall (or the wall's first cells) is a false one.
       bool in_obstacle = false;
-      if (clear && !ambiguous && pc.relocalize_min_clearance_m > 0.0f) {
+      if (clear && !ambiguous && !at_edge && pc.relocalize_min_clearance_m > 0.0f) {
         Eigen::Vector2i c;
         in_obstacle = distance_.cell_of(Eigen::Vector2f(w.pose.x, w.pose.y), c) &&
                       distance_.clearance_m[distance_.index(c.x(), c.y())] < pc.relocalize_min_clearance_m;
         if (in_obstacle) ++relocalizations_in_obstacle_;
       }
-      if (clear && !ambiguous && !in_obstacle) {
+      if (clear && !ambiguous && !at_edge && !in_obstacle) {
         at = w.pose;
         relocalized = true;
         ++relocalizations_;

@@ -295,6 +295,7 @@ void ExplorationRuntime::handle_set(const ApproximateTimeCore::Set& set, double 
     stats_.relocalizations_new_space = corrector_.relocalizations_new_space();
     stats_.relocalizations_ambiguous = corrector_.relocalizations_ambiguous();
     stats_.relocalizations_in_obstacle = corrector_.relocalizations_in_obstacle();
+    stats_.relocalizations_at_edge = corrector_.relocalizations_at_edge();
     stats_.relocalizations_asked = corrector_.relocalizations_asked();
     note_relocalization(corrector_.relocalizations(), corrector_.last_relocalization(), corrector_.last_relocalization_scores(),
                         corrector_.last_conflict(), now_s);

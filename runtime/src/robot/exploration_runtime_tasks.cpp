@@ -31,6 +31,7 @@ void ExplorationRuntime::submit_map_update(MapInput&& input) {
     r.relocalizations_new_space = corrector_.relocalizations_new_space();
     r.relocalizations_ambiguous = corrector_.relocalizations_ambiguous();
     r.relocalizations_in_obstacle = corrector_.relocalizations_in_obstacle();
+    r.relocalizations_at_edge = corrector_.relocalizations_at_edge();
     r.relocalizations_asked = corrector_.relocalizations_asked();
     r.scan_match_time_s = corrector_.time_s();
     r.relocalizations = corrector_.relocalizations();
@@ -112,6 +113,7 @@ void ExplorationRuntime::take_results() {
       stats_.relocalizations_new_space = r.relocalizations_new_space;
       stats_.relocalizations_ambiguous = r.relocalizations_ambiguous;
       stats_.relocalizations_in_obstacle = r.relocalizations_in_obstacle;
+      stats_.relocalizations_at_edge = r.relocalizations_at_edge;
       stats_.relocalizations_asked = r.relocalizations_asked;
       stats_.scan_match_time_s = r.scan_match_time_s;
       note_relocalization(r.relocalizations, r.relocalization, r.relocalization_scores, r.relocalization_conflict, r.now_s);

@@ -60,6 +60,7 @@ struct ExplorationRuntime::Result {
   std::size_t relocalizations = 0, relocalizations_held = 0, relocalizations_asked = 0, relocalizations_new_space = 0;
   std::size_t relocalizations_ambiguous = 0;
   std::size_t relocalizations_in_obstacle = 0;
+  std::size_t relocalizations_at_edge = 0;
   Pose2 relocalization;
   RelocalizationScores relocalization_scores;
   float relocalization_conflict = 0.0f;

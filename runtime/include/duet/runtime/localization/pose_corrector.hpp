@@ -88,6 +88,9 @@ class PoseCorrector {
   /// Wide re-matches that fit clearly and unambiguously but put the robot's centre nearer than
   /// relocalize_min_clearance_m to an occupied cell of the map: not taken.
   [[nodiscard]] std::size_t relocalizations_in_obstacle() const noexcept { return relocalizations_in_obstacle_; }
+  /// Wide re-matches that fit clearly and unambiguously but lie within relocalize_edge_steps
+  /// of the window's edge (the scan fits better outside the window): not taken.
+  [[nodiscard]] std::size_t relocalizations_at_edge() const noexcept { return relocalizations_at_edge_; }
   /// The last relocalisation's mean scan score at the new pose, at the prediction and of its
   /// runner-up (the best fit farther than relocalize_distinct_m from it), [0, 1].
   [[nodiscard]] const RelocalizationScores& last_relocalization_scores() const noexcept { return last_relocalization_scores_; }
@@ -124,6 +127,7 @@ class PoseCorrector {
   RelocalizationScores last_relocalization_scores_;
   std::size_t relocalizations_ambiguous_ = 0;
   std::size_t relocalizations_in_obstacle_ = 0;
+  std::size_t relocalizations_at_edge_ = 0;
   double time_s_ = 0.0;
 };
 

@@ -77,6 +77,7 @@ struct RuntimeStats {
   std::size_t relocalizations_held = 0;  ///< wide re-matches not tried: vision confirmed the odometry
   std::size_t relocalizations_ambiguous = 0;   ///< wide re-matches not taken: another fit in the window nearly as good
   std::size_t relocalizations_in_obstacle = 0;  ///< wide re-matches not taken: the robot would stand in a wall
+  std::size_t relocalizations_at_edge = 0;      ///< wide re-matches not taken: on the window's edge
   std::size_t relocalizations_new_space = 0;  ///< wide re-matches not tried: the scan saw new space, the map did not contradict the prediction
   std::size_t relocalizations_asked = 0; ///< wide re-matches tried at once: vision gated out a jump the wheels did not make
   VisualLocalizationStats visual;        ///< visual odometry + EKF (all 0 when localization.visual_odometry is off)

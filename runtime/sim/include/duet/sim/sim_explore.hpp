@@ -164,6 +164,7 @@ struct ExploreSummary {
   std::size_t relocalizations_new_space = 0;  ///< wide re-matches not tried: the scan saw new space
   std::size_t relocalizations_ambiguous = 0;  ///< wide re-matches not taken: another fit nearly as good
   std::size_t relocalizations_in_obstacle = 0;  ///< wide re-matches not taken: the robot would stand in a wall
+  std::size_t relocalizations_at_edge = 0;      ///< wide re-matches not taken: on the window's edge
   std::size_t relocalizations_asked = 0; ///< wide re-matches tried at once: vision gated out a jump
   double occupied_on_obstacles = -1.0;   ///< share of the grid's occupied cells within 0.1 m of a true obstacle (-1: none occupied)
 };
