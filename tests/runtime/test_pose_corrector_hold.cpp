@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <initializer_list>
 #include <limits>
 #include <vector>
 
@@ -98,6 +99,15 @@ Kidnap kidnap(bool confirmed, bool contradicted = false, const PoseCorrectionSet
   return r;
 }
 
+/// Each of `values` in `field` (the rest the defaults) fails validate().
+void expect_rejected(float PoseCorrectionSettings::*field, std::initializer_list<float> values) {
+  for (const float v : values) {
+    PoseCorrectionSettings bad;
+    bad.*field = v;
+    EXPECT_THROW(validate(bad), Error) << v;
+  }
+}
+
 TEST(PoseCorrectorHold, AConfirmedOdometryHoldsTheWideRematch) {
   const Kidnap free = kidnap(false);
   std::printf("carried 0.6 m: relocalised at a score of %.2f (prediction %.2f, best other fit %.2f)\n", free.scores.score, free.scores.prior,
@@ -160,13 +170,7 @@ TEST(PoseCorrectorHold, AWideRematchIntoAnObstacleIsNotTaken) {
   const Kidnap off = kidnap(false, false, pc);
   EXPECT_GE(off.relocalizations, 1u);
   EXPECT_EQ(off.in_obstacle, 0u);
-  PoseCorrectionSettings bad;
-  bad.relocalize_min_clearance_m = -0.1f;
-  EXPECT_THROW(validate(bad), Error);
-  bad.relocalize_min_clearance_m = std::numeric_limits<float>::quiet_NaN();
-  EXPECT_THROW(validate(bad), Error);
-  bad.relocalize_min_clearance_m = 1.5f;
-  EXPECT_THROW(validate(bad), Error);
+  expect_rejected(&PoseCorrectionSettings::relocalize_min_clearance_m, {-0.1f, std::numeric_limits<float>::quiet_NaN(), 1.5f});
 }
 
 // A wide fit on the window's edge is where the window cut the score off, not a peak of it (issue
@@ -194,13 +198,7 @@ TEST(PoseCorrectorHold, AWideRematchOnTheWindowsEdgeIsNotTaken) {
   EXPECT_GE(off.relocalizations, 1u);
   EXPECT_EQ(off.at_edge, 0u);
   EXPECT_LT(off.error_m, 0.15f);
-  PoseCorrectionSettings bad;
-  bad.relocalize_edge_steps = -0.5f;
-  EXPECT_THROW(validate(bad), Error);
-  bad.relocalize_edge_steps = std::numeric_limits<float>::quiet_NaN();
-  EXPECT_THROW(validate(bad), Error);
-  bad.relocalize_edge_steps = 6.0f;
-  EXPECT_THROW(validate(bad), Error);
+  expect_rejected(&PoseCorrectionSettings::relocalize_edge_steps, {-0.5f, std::numeric_limits<float>::quiet_NaN(), 6.0f});
 }
 
 // Vision saw the jump (a gated visual increment): the wide re-match runs at the very next update,
