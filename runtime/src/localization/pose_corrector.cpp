@@ -46,6 +46,20 @@ void validate(const PoseCorrectionSettings& s) {
   if (!in(s.relocalize_distinct_m, 0.0f, 5.0f)) bad("relocalize_distinct_m must be in (0, 5] m, got " + std::to_string(s.relocalize_distinct_m));
 }
 
+namespace {
+/// `fit` lies within relocalize_edge_steps lattice steps of the wide window's edge around `prior`
+/// in x, y or heading (false with the check off). The edge is the lattice's outermost step
+/// (scan_match.cpp: floor(window / step) steps each way).
+bool on_wide_window_edge(const Pose2& fit, const Pose2& prior, const PoseCorrectionSettings& pc) {
+  if (!(pc.relocalize_edge_steps > 0.0f)) return false;
+  auto edge = [&](float window, float step) { return std::floor(window / step + 1e-4f) * step - pc.relocalize_edge_steps * step; };
+  const float edge_m = edge(pc.relocalize_window_m, pc.relocalize_step_m);
+  const float edge_rad = edge(pc.relocalize_window_deg, pc.relocalize_step_deg) * std::numbers::pi_v<float> / 180.0f;
+  return std::abs(fit.x - prior.x) >= edge_m || std::abs(fit.y - prior.y) >= edge_m ||
+         std::abs(std::remainder(fit.theta - prior.theta, 2.0f * std::numbers::pi_v<float>)) >= edge_rad;
+}
+}  // namespace
+
 PoseCorrector::PoseCorrector(const Profile& profile, const PoseCorrectionSettings& settings) : profile_(profile), settings_(settings) {
   validate(settings_);
 }
@@ -194,14 +208,7 @@ Pose2 PoseCorrector::update(const CameraPoints& points, std::span<const SensorFr
       const bool ambiguous = clear && pc.relocalize_min_margin > 0.0f && w.score < w.runner_up_score + pc.relocalize_min_margin;
       if (ambiguous) ++relocalizations_ambiguous_;
       // A fit on the window's edge is where the window cut the score off, not where it peaks.
-      // The edge is the lattice's outermost step (scan_match.cpp: floor(window / step) steps).
-      auto lattice_reach = [](float window, float step) { return std::floor(window / step + 1e-4f) * step; };
-      const float edge_m = lattice_reach(pc.relocalize_window_m, pc.relocalize_step_m) - pc.relocalize_edge_steps * pc.relocalize_step_m;
-      const float edge_rad = (lattice_reach(pc.relocalize_window_deg, pc.relocalize_step_deg) - pc.relocalize_edge_steps * pc.relocalize_step_deg) *
-                             kTwoPi / 360.0f;
-      const bool at_edge = clear && !ambiguous && pc.relocalize_edge_steps > 0.0f &&
-                           (std::abs(w.pose.x - prior.x) >= edge_m || std::abs(w.pose.y - prior.y) >= edge_m ||
-                            std::abs(std::remainder(w.pose.theta - prior.theta, kTwoPi)) >= edge_rad);
+      const bool at_edge = clear && !ambiguous && on_wide_window_edge(w.pose, prior, pc);
       if (at_edge) ++relocalizations_at_edge_;
       // A fit that puts the robot in a wall (or the wall's first cells) is a false one.
       bool in_obstacle = false;
