@@ -2,6 +2,7 @@
 /// ObservationModel's Embree backend: per-tile scenes of occupied-cell faces, 8-wide tracing, sums to the hit.
 #include "observation_model.hpp"
 
+#include <duet/kernels/embree_device.hpp>
 #include <duet/kernels/error.hpp>
 
 #include <embree3/rtcore.h>
@@ -39,10 +40,7 @@ void ObservationModel::Impl::check(const char* what) {
 }
 
 void ObservationModel::Impl::init_embree() {
-  device = rtcNewDevice(nullptr);
-  if (!device)
-    fail(ErrorCode::kInternal, "ObservationModel: rtcNewDevice failed (Embree error " +
-                                   std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))) + ")");
+  device = new_embree_device("ObservationModel");
   rtcSetDeviceErrorFunction(device, &Impl::on_error, this);
   top = rtcNewScene(device);
   check("rtcNewScene");

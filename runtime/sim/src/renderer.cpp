@@ -3,6 +3,7 @@
 /// RgbdRenderer. The per-tile ray tracing, depth noise and colour are in renderer_tiles.cpp.
 #include <duet/sim/renderer.hpp>
 
+#include <duet/kernels/embree_device.hpp>
 #include <duet/kernels/error.hpp>
 
 #include "renderer_detail.hpp"
@@ -316,10 +317,7 @@ struct RgbdRenderer::Impl {
   }
 
   void build() {
-    device = rtcNewDevice(nullptr);
-    if (!device)
-      fail(ErrorCode::kInternal, "RgbdRenderer: rtcNewDevice failed (Embree error " +
-                                     std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))) + ")");
+    device = new_embree_device("RgbdRenderer");
     scene = rtcNewScene(device);
     check("rtcNewScene");
     // Robust mode: no cracks at shared edges, about 1.6x the ray cost; otherwise the fast mode
