@@ -1121,20 +1121,18 @@ TEST(SimRendererDeterminism, TheLabRendersTheSameBytesOnEveryMachine) {
   const RgbdRenderer r(w, RenderSettings{});
   const auto s = kinect(160, 120);
   std::uint64_t h = 0xcbf29ce484222325ull;
-  std::size_t frames = 0, valid = 0;
+  std::size_t valid = 0;
+  RgbdImage img;  // reused: render() keeps its buffers
   for (int iy = 0; iy < 6; ++iy)
     for (int ix = 0; ix < 8; ++ix) {
       const float fx = (static_cast<float>(ix) + 0.5f) / 8.0f, fy = (static_cast<float>(iy) + 0.5f) / 6.0f;
       const Eigen::Vector2f p = w.floor.min + Eigen::Vector2f(fx, fy).cwiseProduct(w.floor.max - w.floor.min);
       const float yaw = 0.37f * static_cast<float>(ix + 8 * iy);
-      RgbdImage img;
       r.render(s, camera({p.x(), p.y(), 0.45f}, yaw, 0.05f), static_cast<std::uint64_t>(ix + 8 * iy), img);
       h = fnv1a(h, img.depth.data(), img.depth.size() * sizeof(img.depth[0]));
       h = fnv1a(h, img.rgb.data(), img.rgb.size());
       for (const auto z : img.depth) valid += z > 0 ? 1 : 0;
-      ++frames;
     }
-  EXPECT_EQ(frames, 48u);
   EXPECT_GT(valid, 48u * 160u * 120u / 4u);  // most pixels see a surface
   EXPECT_EQ(h, 0xc97310c32e7e7f18ull) << std::hex << "hash 0x" << h;
 }

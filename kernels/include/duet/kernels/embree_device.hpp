@@ -7,8 +7,8 @@
 /// exactly on one machine then parts from the same run on a machine of another vector width
 /// after a few hundred simulated seconds. duet caps Embree's ISA (kEmbreeDeviceConfig), so a run (a seed,
 /// a profile, a map) gives the same bytes on every x86-64 CPU that has it; a CPU without it
-/// runs Embree's narrower kernels, which may differ. The cap costs the renderer little (its rays
-/// are coherent, one per pixel; bench/RESULTS.md has the figures).
+/// runs Embree's narrower kernels, which may differ. The cap costs a one-thread render about
+/// 16 % on an AVX-512 CPU and nothing measurable on two threads (bench/RESULTS.md, CI row 59).
 #include <embree3/rtcore.h>
 
 namespace duet {
