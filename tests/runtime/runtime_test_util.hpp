@@ -7,7 +7,9 @@
 
 #include <filesystem>
 #include <fstream>
+#include <exception>
 #include <functional>
+#include <initializer_list>
 #include <sstream>
 #include <string>
 #include <system_error>
@@ -58,6 +60,20 @@ inline void spit(const fs::path& p, const std::string& bytes) {
 }
 
 /// The message of the duet::Error `fn` throws ("" if it throws none).
+// Expects `fn` to throw duet::Error with `code` and a message containing every one of `parts`.
+template <class Fn>
+void expect_error(Fn&& fn, duet::ErrorCode code, std::initializer_list<std::string> parts) {
+  try {
+    fn();
+    ADD_FAILURE() << "no duet::Error thrown";
+  } catch (const duet::Error& e) {
+    EXPECT_EQ(static_cast<int>(e.code()), static_cast<int>(code)) << e.what();
+    for (const std::string& part : parts) EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "not a duet::Error: " << e.what();
+  }
+}
+
 inline std::string error_of(const std::function<void()>& fn) {
   try {
     fn();

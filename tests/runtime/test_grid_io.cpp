@@ -86,18 +86,7 @@ bool same_cells(const OccupancyGrid& a, const OccupancyGrid& b) {
   return true;
 }
 
-template <class Fn>
-void expect_error(Fn&& fn, ErrorCode code, std::initializer_list<std::string> parts) {
-  try {
-    fn();
-    ADD_FAILURE() << "no duet::Error thrown";
-  } catch (const duet::Error& e) {
-    EXPECT_EQ(static_cast<int>(e.code()), static_cast<int>(code)) << e.what();
-    for (const std::string& part : parts) EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "not a duet::Error: " << e.what();
-  }
-}
+using duet_test::expect_error;
 
 // A small grid with every kind of cell: unknown, free, occupied, and in between.
 OccupancyGrid pattern_grid() {
