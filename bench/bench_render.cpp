@@ -1,4 +1,4 @@
-// Render/{duet,duet_1t}/dual_640x480: one frame of each RGB-D sensor of the paper's robot
+// Render/{duet,duet_1t,duet_robust,duet_robust_1t}/dual_640x480: one frame of each RGB-D sensor of the paper's robot
 // (builtin_profile("dual_kinect_kobuki"): 640x480, 57 x 43 deg, Eq. (6) extrinsics) ray traced
 // with Embree by sim::RgbdRenderer - depth with the default Kinect noise model plus textured,
 // shaded colour - inside builtin_world("lab") (a small walled room built here if the lab is not
@@ -6,6 +6,7 @@
 // of its largest open area), heading 30 deg. Issue 4 target: both frames in <= 15 ms on 2 cores.
 // Items = pixels rendered per iteration (2 x 640 x 480); "out" = pixels with a depth return.
 // The renderer (mesh + BVH) is built once outside the timed loop; frame seeds vary per iteration.
+// The _robust variants: RenderSettings::robust_intersection (Embree's robust mode, no grown triangles).
 #include "bench_util.hpp"
 
 #include <duet/runtime/config/profile.hpp>
@@ -52,8 +53,8 @@ struct RenderInput {
   std::string label;
 };
 
-const RenderInput& render_input() {
-  static const RenderInput in = [] {
+RenderInput make_render_input(bool robust) {
+  {
     RenderInput r;
     try {
       r.world = sim::builtin_world("lab");
@@ -78,20 +79,30 @@ const RenderInput& render_input() {
     T_world_robot.translate(Eigen::Vector3f(r.pose.x, r.pose.y, 0.0f));
     T_world_robot.rotate(Eigen::AngleAxisf(r.pose.theta, Eigen::Vector3f::UnitZ()));
     for (const SensorProfile& s : r.profile.sensors) r.T_world_optical.push_back(T_world_robot * s.T_robot_optical());
-    r.renderer = std::make_unique<sim::RgbdRenderer>(r.world);
+    sim::RenderSettings settings;
+    settings.robust_intersection = robust;
+    r.renderer = std::make_unique<sim::RgbdRenderer>(r.world, settings);
     r.label += " at (" + std::to_string(r.pose.x).substr(0, 4) + ", " + std::to_string(r.pose.y).substr(0, 4) + ")";
+    if (robust) r.label += ", robust intersection";
     return r;
-  }();
-  return in;
+  }
+}
+
+const RenderInput& render_input(bool robust) {
+  static const RenderInput fast = make_render_input(false);
+  static const RenderInput exact = make_render_input(true);
+  return robust ? exact : fast;
 }
 
 }  // namespace
 
 void register_render() {
+  for (const bool robust : {false, true})
   for (const DuetImpl impl : kDuetImpls) {
-    benchmark::RegisterBenchmark(bench_name("Render", impl.name, "dual_640x480").c_str(), [impl](benchmark::State& state) {
+    const std::string name = std::string(impl.name) + (robust ? "_robust" : "");
+    benchmark::RegisterBenchmark(bench_name("Render", name.c_str(), "dual_640x480").c_str(), [impl, robust](benchmark::State& state) {
       run_guarded(state, [&] {
-        const RenderInput& in = render_input();
+        const RenderInput& in = render_input(robust);
         const auto& sensors = in.profile.sensors;
         std::vector<sim::RgbdImage> images(sensors.size());
         std::size_t pixels = 0;

@@ -1,16 +1,25 @@
 /// @file embree_device.cpp
-/// new_embree_device(): every duet Embree device, capped at one ISA (see embree_device.hpp).
+/// new_embree_device(): every duet Embree device (see embree_device.hpp).
 #include <duet/kernels/embree_device.hpp>
 #include <duet/kernels/error.hpp>
 
+#include <cstdlib>
 #include <string>
 
 namespace duet {
 
+std::string embree_device_config() {
+  const char* env = std::getenv("DUET_EMBREE_CONFIG");
+  return env != nullptr ? std::string(env) : std::string(kEmbreeDeviceConfig);
+}
+
 RTCDevice new_embree_device(const char* who) {
-  RTCDevice device = rtcNewDevice(kEmbreeDeviceConfig);
+  const bool from_env = std::getenv("DUET_EMBREE_CONFIG") != nullptr;
+  const std::string config = embree_device_config();
+  RTCDevice device = rtcNewDevice(config.c_str());
   if (!device)
-    fail(ErrorCode::kInternal, std::string(who) + ": rtcNewDevice(\"" + kEmbreeDeviceConfig + "\") failed (Embree error " +
+    fail(ErrorCode::kInternal, std::string(who) + ": rtcNewDevice(\"" + config + "\"" +
+                                   (from_env ? ", from DUET_EMBREE_CONFIG" : "") + ") failed (Embree error " +
                                    std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))) + ")");
   return device;
 }

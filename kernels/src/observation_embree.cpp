@@ -149,6 +149,27 @@ Eigen::Vector2i ObservationModel::Impl::first_cell(const Eigen::Vector2f& o, con
   return c;
 }
 
+// The distance along o + t d to the face `code` (cell << 2 | side) hit by Embree, from the face's
+// line as build_tile_scene() placed it, in double: the same bits on every CPU. Embree's own
+// distance goes through an approximate reciprocal whose bits differ between Intel and AMD CPUs
+// and between Embree's ISAs. `fallback` (Embree's) only for a degenerate direction.
+float ObservationModel::Impl::face_distance(std::uint32_t code, const Eigen::Vector2f& o, const Eigen::Vector2f& d,
+                                            float fallback) const noexcept {
+  const std::uint32_t cell = code >> 2, face = code & 3u;
+  const int w = view.width;
+  const int ix = static_cast<int>(cell % static_cast<std::uint32_t>(w)), iy = static_cast<int>(cell / static_cast<std::uint32_t>(w));
+  const float res = view.resolution_m;
+  double t = 0.0;
+  if (face < 2) {
+    const float x = view.origin.x() + static_cast<float>(ix + static_cast<int>(face)) * res;
+    t = (static_cast<double>(x) - o.x()) / static_cast<double>(d.x());
+  } else {
+    const float y = view.origin.y() + static_cast<float>(iy + static_cast<int>(face - 2u)) * res;
+    t = (static_cast<double>(y) - o.y()) / static_cast<double>(d.y());
+  }
+  return std::isfinite(t) && t >= 0.0 ? static_cast<float>(t) : fallback;
+}
+
 void ObservationModel::Impl::trace8(const Eigen::Vector2f* o, const Eigen::Vector2f* d, int count, float t0, float t1,
                                     float* range, std::int64_t* cell) const {
   alignas(32) int valid[8];
@@ -191,7 +212,7 @@ void ObservationModel::Impl::trace8(const Eigen::Vector2f* o, const Eigen::Vecto
       const std::uint32_t face = code & 3u;
       const float dn = face == 0 ? -d[k].x() : face == 1 ? d[k].x() : face == 2 ? -d[k].y() : d[k].y();
       if (dn < 0.0f) {  // entering the occupied cell: a real hit
-        range[k] = rh.ray.tfar[k];
+        range[k] = face_distance(code, o[k], d[k], rh.ray.tfar[k]);
         cell[k] = static_cast<std::int64_t>(code >> 2);
         break;
       }

@@ -299,6 +299,7 @@ struct ObservationModel::Impl {
   /// Embree: up to 8 rays; hit[k] = range, cell[k] = hit cell index or -1 (no hit).
   /// A ray starting in an occupied cell hits at t0 without tracing; a hit on a face the ray leaves
   /// (it started on that face) is skipped by re-tracing just past it.
+  [[nodiscard]] float face_distance(std::uint32_t code, const Eigen::Vector2f& o, const Eigen::Vector2f& d, float fallback) const noexcept;
   void trace8(const Eigen::Vector2f* o, const Eigen::Vector2f* d, int count, float t0, float t1, float* range,
               std::int64_t* cell) const;
 

@@ -9,6 +9,7 @@
 // (../shared/data/maps). Embree == DDA on random poses; update_grid == fresh set_grid with the
 // expected number of rebuilt tiles; 1 vs 2 threads; invalid settings and sizes.
 #include "kernel_test_util.hpp"
+#include "embree_config.hpp"
 
 #include <duet/kernels/entropy.hpp>
 #include <duet/kernels/error.hpp>
@@ -624,6 +625,37 @@ TEST(ObservationModel, EmbreeEqualsDdaOnRandomPoses) {
   }
   EXPECT_GT(hits, a.size() / 10);
   EXPECT_LE(differ * 1000, a.size()) << differ << " of " << a.size() << " rays differ";
+}
+
+// Embree's kernels (SSE, AVX2, AVX-512) and the CPU's vendor change the last bits of Embree's hit
+// distances; the model computes the distance from the hit face itself (embree_device.hpp), so
+// its observations are the same bytes with every kernel - and on every machine.
+TEST(ObservationModel, EmbreeGivesTheSameBytesWithEveryKernel) {
+  DUET_REQUIRE_DATA("maps/willow-2010-02-18-0.10.pgm");
+  TestGrid g;
+  ASSERT_TRUE(load_willow(g));
+  const auto poses = random_poses(g, test::full_or(300, 60), 17, true, 0.0f);
+  ASSERT_FALSE(poses.empty());
+  const auto sensors = paper_dual_sensors(30);
+  auto run = [&] {
+    ObservationModel m(settings_for(ObservationBackend::kEmbree));
+    m.set_grid(g.view());
+    std::vector<RayObservation> out(poses.size() * 60);
+    m.observe(poses, sensors, out);
+    std::vector<float> flat;
+    std::size_t hits = 0;
+    for (const auto& r : out) {
+      flat.push_back(r.entropy_bits);
+      flat.push_back(r.range_m);
+      flat.push_back(static_cast<float>(r.cells) + (r.hit ? 0.5f : 0.0f));
+      hits += r.hit ? 1 : 0;
+    }
+    EXPECT_GT(hits, out.size() / 10);
+    return flat;
+  };
+  const auto ref = duet_test::with_embree_config(duet_test::kEmbreeIsaConfigs[0], run);
+  for (const char* config : duet_test::kEmbreeIsaConfigs)
+    EXPECT_TRUE(test::bitwise_equal(ref, duet_test::with_embree_config(config, run))) << config;
 }
 
 // ---- update_grid -----------------------------------------------------------------------------------
