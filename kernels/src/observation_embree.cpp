@@ -178,6 +178,23 @@ void ObservationModel::Impl::trace8(const Eigen::Vector2f* o, const Eigen::Vecto
     valid[k] = 0;
     range[k] = t1;
     cell[k] = -1;
+    // Every lane holds a well-formed ray, also those masked out: with stack garbage there,
+    // Embree's SSE kernels (rtcIntersect8 as two packets of 4, through the tile instances) failed
+    // their assertion all(valid, ray.valid()) under the sanitizer build.
+    rh.ray.org_x[k] = 0.0f;
+    rh.ray.org_y[k] = 0.0f;
+    rh.ray.org_z[k] = 0.0f;
+    rh.ray.dir_x[k] = 1.0f;
+    rh.ray.dir_y[k] = 0.0f;
+    rh.ray.dir_z[k] = 0.0f;
+    rh.ray.tnear[k] = 0.0f;
+    rh.ray.tfar[k] = 0.0f;
+    rh.ray.time[k] = 0.0f;
+    rh.ray.mask[k] = 0xFFFFFFFFu;
+    rh.ray.id[k] = static_cast<unsigned>(k);
+    rh.ray.flags[k] = 0;
+    rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
     if (k >= count) continue;
     const Eigen::Vector2i c0 = first_cell(o[k], d[k], t0, t1);
     if (view.in_bounds(c0.x(), c0.y()) && occupied(c0.x(), c0.y())) {
