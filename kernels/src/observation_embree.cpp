@@ -203,20 +203,12 @@ void ObservationModel::Impl::trace8(const Eigen::Vector2f* o, const Eigen::Vecto
       continue;
     }
     valid[k] = -1;
-    rh.ray.org_x[k] = o[k].x();
+    rh.ray.org_x[k] = o[k].x();  // z, time, mask, id, flags and the hit as set above
     rh.ray.org_y[k] = o[k].y();
-    rh.ray.org_z[k] = 0.0f;
     rh.ray.dir_x[k] = d[k].x();
     rh.ray.dir_y[k] = d[k].y();
-    rh.ray.dir_z[k] = 0.0f;
     rh.ray.tnear[k] = t0;
     rh.ray.tfar[k] = t1;
-    rh.ray.time[k] = 0.0f;
-    rh.ray.mask[k] = 0xFFFFFFFFu;
-    rh.ray.id[k] = static_cast<unsigned>(k);
-    rh.ray.flags[k] = 0;
-    rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
   }
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);

@@ -17,8 +17,8 @@
 /// (observation_embree.cpp): its distances do not depend on the kernels (test:
 /// ObservationModel.EmbreeGivesTheSameBytesWithEveryKernel). The renderer keeps
 /// Embree's distances: recomputing them and choosing the nearest surface in an intersection
-/// filter made the frames the same with every kernel but cost 50 % of the render (bench
-/// Render/duet/dual_640x480 10.1 -> 15.4 ms), and Embree's AVX2 coherent packet traversal still
+/// filter made the frames the same with every kernel but cost 50 % of the render (AVX2 kernels, bench
+/// Render/duet/dual_640x480 10.1 -> 15.1 ms), and Embree's AVX2 coherent packet traversal still
 /// lets rays through a wall at places (bench/RESULTS.md, stop 60).
 #include <embree3/rtcore.h>
 
