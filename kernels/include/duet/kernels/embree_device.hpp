@@ -36,7 +36,8 @@ std::string embree_device_config();
 
 /// A new Embree device with embree_device_config(). Throws duet::Error (kInternal), naming `who`,
 /// the configuration and where it came from, and Embree's error code, when Embree cannot create
-/// one (for instance an invalid DUET_EMBREE_CONFIG). The caller releases it.
+/// one (for instance DUET_EMBREE_CONFIG=threads=abc). Embree itself ignores keys and ISA names
+/// it does not know (max_isa=bogus: its widest kernels). The caller releases it.
 RTCDevice new_embree_device(const char* who);
 
 }  // namespace duet
