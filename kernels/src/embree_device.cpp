@@ -8,14 +8,19 @@
 
 namespace duet {
 
+namespace {
+const char* config_from_env() { return std::getenv("DUET_EMBREE_CONFIG"); }
+}  // namespace
+
 std::string embree_device_config() {
-  const char* env = std::getenv("DUET_EMBREE_CONFIG");
+  const char* env = config_from_env();
   return env != nullptr ? std::string(env) : std::string(kEmbreeDeviceConfig);
 }
 
 RTCDevice new_embree_device(const char* who) {
-  const bool from_env = std::getenv("DUET_EMBREE_CONFIG") != nullptr;
-  const std::string config = embree_device_config();
+  const char* env = config_from_env();
+  const bool from_env = env != nullptr;
+  const std::string config = from_env ? std::string(env) : std::string(kEmbreeDeviceConfig);
   RTCDevice device = rtcNewDevice(config.c_str());
   if (!device)
     fail(ErrorCode::kInternal, std::string(who) + ": rtcNewDevice(\"" + config + "\"" +

@@ -299,9 +299,13 @@ struct ObservationModel::Impl {
   /// Embree: up to 8 rays; hit[k] = range, cell[k] = hit cell index or -1 (no hit).
   /// A ray starting in an occupied cell hits at t0 without tracing; a hit on a face the ray leaves
   /// (it started on that face) is skipped by re-tracing just past it.
-  [[nodiscard]] float face_distance(std::uint32_t code, const Eigen::Vector2f& o, const Eigen::Vector2f& d, float fallback) const noexcept;
   void trace8(const Eigen::Vector2f* o, const Eigen::Vector2f* d, int count, float t0, float t1, float* range,
               std::int64_t* cell) const;
+  /// The distance along o + t d to the cell face `code` (cell << 2 | side) Embree hit, computed
+  /// from the face itself (the same bits with every Embree kernel); `fallback` for a degenerate
+  /// direction.
+  [[nodiscard]] float face_distance(std::uint32_t code, const Eigen::Vector2f& o, const Eigen::Vector2f& d,
+                                    float fallback) const noexcept;
 
   /// Embree: entropy summed by a walk without occupancy checks up to the hit cell (included).
   /// If the walk misses the hit cell (a ray through a cell corner), it stops at the first cell
