@@ -205,9 +205,14 @@ void observe_particle(const ObservationModel& model, std::span<const SensorSecto
   double log_w = 0.0;
   double reward_sum = 0.0, unknown_sum = 0.0;
   std::int64_t visits = 0;
+  // The walks' arrays in locals: the overlay's stores could otherwise alias the vectors' members,
+  // and the compiler reloads them per cell.
+  const RayCell* const cells = ts.cells.data();
+  const float l_min = s.min_logodds, l_max = s.max_logodds;
+  const std::uint32_t* const ray_end = ts.ray_end.data();
   for (int j = 0; j < phi; ++j) {
     const std::uint32_t stamp = ts.next_stamp(n_cells);
-    std::uint32_t* ov = ts.overlay.data();
+    std::uint32_t* const ov = ts.overlay.data();
     double disc_sum = 0.0;
     for (int k = 0; k < H; ++k) {
       const float delta = s.ism_noise_logodds > 0.0f ? rng.uniform(-s.ism_noise_logodds, s.ism_noise_logodds) : 0.0f;
@@ -218,15 +223,15 @@ void observe_particle(const ObservationModel& model, std::span<const SensorSecto
       float r_k = 0.0f, r_unknown = 0.0f;
       for (std::size_t r = 0; r < rays_per_stage; ++r) {
         const std::size_t ray = static_cast<std::size_t>(k) * rays_per_stage + r;
-        const std::uint32_t begin = ray == 0 ? 0u : ts.ray_end[ray - 1];
-        const std::uint32_t end = ts.ray_end[ray];
+        const std::uint32_t begin = ray == 0 ? 0u : ray_end[ray - 1];
+        const std::uint32_t end = ray_end[ray];
         // z ~ chi (line 13): the number of unknown cells passed before a sampled hit is geometric.
         // u is drawn for every ray (the stream does not depend on the cells), its log only when
         // the ray meets an unknown cell (most rays end on a known wall): unknown_left < 0 = not yet.
         const float u = 1.0f - rng.uniform01();  // (0, 1]
         std::int64_t unknown_left = -1;
         for (std::uint32_t c = begin; c < end; ++c) {
-          const RayCell cell = ts.cells[c];
+          const RayCell cell = cells[c];
           const std::uint32_t kind = cell.packed & 3u;
           const std::uint32_t idx = cell.packed >> 2;
           ++visits;
@@ -251,14 +256,14 @@ void observe_particle(const ObservationModel& model, std::span<const SensorSecto
             --unknown_left;
           }
           if (kind == kUnknownNan) {
-            const float r = hit ? r_hit_nan : r_miss_nan;  // 1 bit - E(clamp(l_ISM))
-            r_k += r;
-            r_unknown += r;
+            const float gain = hit ? r_hit_nan : r_miss_nan;  // 1 bit - E(clamp(l_ISM))
+            r_k += gain;
+            r_unknown += gain;
           } else {
-            const float post = std::clamp(cell.l + (hit ? l_hit : l_miss), s.min_logodds, s.max_logodds);  // line 15
-            const float r = et(cell.l) - et(post);  // line 16
-            r_k += r;
-            if (kind == kUnknownFinite) r_unknown += r;
+            const float post = std::clamp(cell.l + (hit ? l_hit : l_miss), l_min, l_max);  // line 15
+            const float gain = et(cell.l) - et(post);  // line 16
+            r_k += gain;
+            if (kind == kUnknownFinite) r_unknown += gain;
           }
           if (idx != kOutside) ov[idx] = (stamp << 1) | (hit ? 1u : 0u);
           if (hit) break;

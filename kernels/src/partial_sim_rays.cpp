@@ -156,13 +156,8 @@ class RayWalker {
         }
       }
     } else if (observing_) {
-      const std::uint32_t kind = code - 1;
-      out_[n_++] = make_cell(inside ? static_cast<std::uint32_t>(idx) : kOutside, kind,
-                             kind == kUnknownNan ? 0.0f : logodds_[idx]);
-      if (kind == kOccupiedCell) {
-        done_ = true;
-        return;
-      }
+      store_run();
+      return;
     } else if (code == kOccupiedCell + 1) {  // a known obstacle before min_range blocks the ray
       done_ = true;
       return;
@@ -177,6 +172,54 @@ class RayWalker {
   }
 
  private:
+  /// Stores the current cell (observed, not a skip cell) and those
+  /// after it, in a loop over locals like the skip loop in advance(): the walk is past min_range,
+  /// so every cell from here on is observed. Ends the ray at a known obstacle or at max_range, or
+  /// stops on a skip cell, which the next advance() handles (its jump test). The same cells as
+  /// one advance() per cell (measured on Willow: ~35 of a ray's ~42 cells are stored).
+  void store_run() {
+    detail::CellWalk& c = w_walk_;
+    const std::int64_t sx = c.sx, sy = c.sy, step_y = c.sy * static_cast<std::int64_t>(w_);
+    const std::int64_t dx = c.dx, dy = c.dy, end = c.end;
+    const auto w = static_cast<std::uint64_t>(w_), h = static_cast<std::uint64_t>(h_);
+    const std::uint8_t* const codes = codes_;
+    const float* const logodds = logodds_;
+    RayCell* const out = out_;
+    std::size_t n = n_;
+    std::int64_t mx = c.mx, my = c.my, ix = c.ix, iy = c.iy, t_now = t_now_;
+    std::int64_t i = iy * static_cast<std::int64_t>(w) + ix;  // read only while inside (a ray may enter the grid)
+    for (;;) {
+      const bool inside = static_cast<std::uint64_t>(ix) < w && static_cast<std::uint64_t>(iy) < h;
+      const std::int64_t at = inside ? i : 0;
+      const std::uint32_t code = inside ? codes[at] : kUnknownNan + 1;
+      if (code == kSkipCode) break;
+      const std::uint32_t kind = code - 1;
+      out[n++] = make_cell(inside ? static_cast<std::uint32_t>(at) : kOutside, kind, kind == kUnknownNan ? 0.0f : logodds[at]);
+      if (kind == kOccupiedCell) {
+        done_ = true;
+        break;
+      }
+      const std::int64_t tn = mx < my ? mx : my;
+      if (tn >= end) {
+        done_ = true;
+        break;
+      }
+      t_now = tn;
+      const bool bx = mx <= my, by = my <= mx;  // both on a tie (detail::CellWalk::step)
+      ix += bx ? sx : 0;
+      iy += by ? sy : 0;
+      i += (bx ? sx : 0) + (by ? step_y : 0);
+      mx += bx ? dx : 0;
+      my += by ? dy : 0;
+    }
+    n_ = n;
+    c.mx = mx;
+    c.my = my;
+    c.ix = static_cast<int>(ix);
+    c.iy = static_cast<int>(iy);
+    t_now_ = t_now;
+  }
+
   /// Moves the walk to time t (fixed point, t_now_ <= t < end): every crossing at a time <= t is
   /// taken, counted by a division rounded in double and corrected exactly in integers.
   void jump_to(std::int64_t t) {
