@@ -138,12 +138,7 @@ class RayWalker {
             return;
           }
           t_now = tn;
-          const bool bx = mx <= my, by = my <= mx;  // both on a tie
-          ix += bx ? sx : 0;
-          iy += by ? sy : 0;
-          i += (bx ? sx : 0) + (by ? step_y : 0);
-          mx += bx ? dx : 0;
-          my += by ? dy : 0;
+          step_indexed(ix, iy, i, mx, my, sx, sy, step_y, dx, dy);
           if (static_cast<std::uint64_t>(ix) >= static_cast<std::uint64_t>(w) ||
               static_cast<std::uint64_t>(iy) >= static_cast<std::uint64_t>(h) || codes[i] != kSkipCode) {
             c.mx = mx;  // the next advance() handles this cell
@@ -172,11 +167,20 @@ class RayWalker {
   }
 
  private:
-  /// Stores the current cell (observed, not a skip cell) and those
-  /// after it, in a loop over locals like the skip loop in advance(): the walk is past min_range,
-  /// so every cell from here on is observed. Ends the ray at a known obstacle or at max_range, or
-  /// stops on a skip cell, which the next advance() handles (its jump test). The same cells as
-  /// one advance() per cell (measured on Willow: ~35 of a ray's ~42 cells are stored).
+  /// detail::CellWalk::step on locals that also keep the cell's index i (= iy * w + ix; step_y =
+  /// sy * w): the hot loops of advance() and store_run().
+  static void step_indexed(std::int64_t& ix, std::int64_t& iy, std::int64_t& i, std::int64_t& mx, std::int64_t& my,
+                           std::int64_t sx, std::int64_t sy, std::int64_t step_y, std::int64_t dx, std::int64_t dy) noexcept {
+    const bool bx = mx <= my, by = my <= mx;  // both on a tie
+    i += (bx ? sx : 0) + (by ? step_y : 0);
+    detail::CellWalk::step(ix, iy, mx, my, sx, sy, dx, dy);
+  }
+
+  /// Stores the current cell (observed, not a skip cell) and those after it, in a loop over
+  /// locals like the skip loop in advance(): the walk is past min_range, so every cell from here
+  /// on is observed. Ends the ray at a known obstacle or at max_range, or stops on a skip cell,
+  /// which the next advance() handles (its jump test). The same cells as one advance() per cell
+  /// (measured on Willow: ~35 of a ray's ~42 cells are stored).
   void store_run() {
     detail::CellWalk& c = w_walk_;
     const std::int64_t sx = c.sx, sy = c.sy, step_y = c.sy * static_cast<std::int64_t>(w_);
@@ -205,12 +209,7 @@ class RayWalker {
         break;
       }
       t_now = tn;
-      const bool bx = mx <= my, by = my <= mx;  // both on a tie (detail::CellWalk::step)
-      ix += bx ? sx : 0;
-      iy += by ? sy : 0;
-      i += (bx ? sx : 0) + (by ? step_y : 0);
-      mx += bx ? dx : 0;
-      my += by ? dy : 0;
+      step_indexed(ix, iy, i, mx, my, sx, sy, step_y, dx, dy);
     }
     n_ = n;
     c.mx = mx;
