@@ -151,24 +151,6 @@ int run_to_end(sim::SimExplore& run, bool quiet, bool tty, const std::string& pr
   return sig;
 }
 
-sim::ExploreSettings make_settings(const Profile& profile, std::uint64_t seed, double max_time, double sensor_rate) {
-  sim::ExploreSettings es;
-  es.runtime = profile.runtime;  // the profile's settings tree (runtime, localization, exploration, control)
-  es.seed = seed;
-  es.max_time_s = max_time;
-  es.faults = profile.faults;
-  if (sensor_rate < 0.0) {
-    double r = 0.0;
-    for (const auto& s : profile.sensors) r = std::max(r, static_cast<double>(s.rate_hz));
-    es.sensor_rate_hz = r;
-  } else if (sensor_rate == 0.0 && profile.runtime.visual_odometry.enabled) {
-    es.sensor_rate_hz = profile.runtime.visual_odometry.rate_hz;  // the pipeline's rate: vision's
-  } else {
-    es.sensor_rate_hz = sensor_rate;
-  }
-  return es;
-}
-
 int run_explore(const ExploreOptions& o) {
   if (!(std::isfinite(o.max_time) && o.max_time > 0.0 && o.max_time <= 1e6))
     fail(ErrorCode::kInvalidArgument, "--max-time must be in (0, 1e6] s, got " + std::to_string(o.max_time));
@@ -179,7 +161,7 @@ int run_explore(const ExploreOptions& o) {
   Profile profile = resolve_profile(o.profile, overlays(o.configs, o.sets));
   if (!o.start.empty()) sim::set_start(world, sim::parse_start(o.start), profile.chassis.radius_m, "--start");
   apply_strategy(profile, o.strategy);
-  sim::ExploreSettings es = make_settings(profile, o.seed, o.max_time, rate);
+  sim::ExploreSettings es = sim::explore_settings(profile, o.seed, o.max_time, rate);
   es.realtime = o.realtime;
   // Flags given on the command line override the profile; absent ones leave it.
   if (o.execution == "background" || (o.execution == "auto" && o.realtime)) es.runtime.execution = Execution::kBackground;
@@ -422,7 +404,7 @@ int run_compare(const CompareOptions& o) {
             const std::uint64_t seed = o.first_seed + static_cast<std::uint64_t>(k);
             Profile profile = resolve_profile(pname, over);
             apply_strategy(profile, strategy);
-            sim::ExploreSettings es = make_settings(profile, seed, o.max_time, 0.0);
+            sim::ExploreSettings es = sim::explore_settings(profile, seed, o.max_time, 0.0);
             sim::SimExplore run(worlds[w], std::move(profile), es);
             const std::string label = (worlds.size() > 1 ? world_names[w] + " " : std::string()) + variant + " seed " + std::to_string(seed) + ": ";
             stopped_by = run_to_end(run, o.quiet, tty, label, "the runs so far were saved");

@@ -48,6 +48,24 @@ const char* to_string(StopReason r) {
   return "unknown";
 }
 
+ExploreSettings explore_settings(const Profile& profile, std::uint64_t seed, double max_time_s, double sensor_rate_hz) {
+  ExploreSettings es;
+  es.runtime = profile.runtime;
+  es.seed = seed;
+  es.max_time_s = max_time_s;
+  es.faults = profile.faults;
+  if (sensor_rate_hz < 0.0) {
+    double r = 0.0;
+    for (const auto& sensor : profile.sensors) r = std::max(r, static_cast<double>(sensor.rate_hz));
+    es.sensor_rate_hz = r;
+  } else if (sensor_rate_hz == 0.0 && profile.runtime.visual_odometry.enabled) {
+    es.sensor_rate_hz = profile.runtime.visual_odometry.rate_hz;  // the pipeline's rate: vision's
+  } else {
+    es.sensor_rate_hz = sensor_rate_hz;
+  }
+  return es;
+}
+
 void validate(const ExploreSettings& s) {
   auto bad = [](const std::string& what) { fail(ErrorCode::kInvalidArgument, "ExploreSettings::" + what); };
   if (!(std::isfinite(s.max_time_s) && s.max_time_s > 0.0 && s.max_time_s <= 1e6))

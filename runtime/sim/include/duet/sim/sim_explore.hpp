@@ -82,6 +82,12 @@ struct ExploreSettings {
 };
 void validate(const ExploreSettings& s);
 
+/// The settings `duet explore` runs a profile with: the profile's settings tree (runtime,
+/// localization, exploration, control) and its faults, the seed and the time limit [s].
+/// sensor_rate_hz: < 0 = every frame the profile's sensors give; 0 = what the pipeline consumes
+/// (the map rate, or vision's rate when the profile enables visual odometry); > 0 = that rate.
+ExploreSettings explore_settings(const Profile& profile, std::uint64_t seed, double max_time_s, double sensor_rate_hz = 0.0);
+
 /// One health sample: the last health_period_s of the run.
 struct HealthSample {
   double t_s = 0.0;               ///< simulated time at the end of the window [s]
