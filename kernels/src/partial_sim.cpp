@@ -29,42 +29,6 @@ inline int floor_int(float x) noexcept {
   return i - (static_cast<float>(i) > x ? 1 : 0);
 }
 
-// Eq. (5) in bits for finite log-odds, by linear interpolation in a table over [-kTableL, kTableL]
-// (step 1/256; the interpolation error is below 2e-7 bits). Posteriors are clamped to the
-// settings' [min_logodds, max_logodds], which validate() keeps inside the table.
-constexpr float kTableL = 20.0f;
-constexpr float kTableScale = 256.0f;
-constexpr int kTableSize = static_cast<int>(2 * kTableL * kTableScale) + 2;
-
-double entropy_bits_exact(double l) {
-  const double p = 1.0 / (1.0 + std::exp(-l));
-  const double q = 1.0 - p;
-  double e = 0.0;
-  if (p > 0.0) e -= p * std::log2(p);
-  if (q > 0.0) e -= q * std::log2(q);
-  return e;
-}
-
-struct EntropyTable {
-  std::array<float, kTableSize> v{};
-  EntropyTable() {
-    for (int i = 0; i < kTableSize; ++i)
-      v[static_cast<std::size_t>(i)] = static_cast<float>(entropy_bits_exact(i / static_cast<double>(kTableScale) - kTableL));
-  }
-  [[nodiscard]] float operator()(float l) const noexcept {
-    const float x = (l + kTableL) * kTableScale;
-    const int i = static_cast<int>(x);
-    const float f = x - static_cast<float>(i);
-    const float a = v[static_cast<std::size_t>(i)], b = v[static_cast<std::size_t>(i) + 1];
-    return a + f * (b - a);
-  }
-};
-
-const EntropyTable& entropy_table() {
-  static const EntropyTable table;  // immutable after construction (thread-safe static init)
-  return table;
-}
-
 using namespace detail::partial_sim;  // the precomputed rays (partial_sim_rays.hpp)
 
 struct Particle {
@@ -210,6 +174,7 @@ void observe_particle(const ObservationModel& model, std::span<const SensorSecto
   const RayCell* const cells = ts.cells.data();
   const float l_min = s.min_logodds, l_max = s.max_logodds;
   const std::uint32_t* const ray_end = ts.ray_end.data();
+  const std::uint32_t* const ray_tail = ts.ray_tail.data();
   for (int j = 0; j < phi; ++j) {
     const std::uint32_t stamp = ts.next_stamp(n_cells);
     std::uint32_t* const ov = ts.overlay.data();
@@ -230,15 +195,21 @@ void observe_particle(const ObservationModel& model, std::span<const SensorSecto
         // the ray meets an unknown cell (most rays end on a known wall): unknown_left < 0 = not yet.
         const float u = 1.0f - rng.uniform01();  // (0, 1]
         std::int64_t unknown_left = -1;
+        // The visits count the repeats the walk did not store (partial_sim_rays.cpp): those before each cell reached, and
+        // the ray's tail when it is walked to its end.
+        bool cut = false;
         for (std::uint32_t c = begin; c < end; ++c) {
           const RayCell cell = cells[c];
           const std::uint32_t kind = cell.packed & 3u;
           const std::uint32_t idx = cell.packed >> 2;
-          ++visits;
+          visits += 1 + static_cast<std::int64_t>(cell.dropped_before);
           if (idx != kOutside) {
             const std::uint32_t o = ov[idx];
             if ((o >> 1) == stamp) {  // observed earlier in this sample: not counted again
-              if (o & 1u) break;      // sampled occupied: stops this ray too
+              if (o & 1u) {           // sampled occupied: stops this ray too
+                cut = true;
+                break;
+              }
               continue;
             }
           }
@@ -261,13 +232,17 @@ void observe_particle(const ObservationModel& model, std::span<const SensorSecto
             r_unknown += gain;
           } else {
             const float post = std::clamp(cell.l + (hit ? l_hit : l_miss), l_min, l_max);  // line 15
-            const float gain = et(cell.l) - et(post);  // line 16
+            const float gain = cell.e - et(post);  // line 16 (cell.e = E(l_prior), from the walk)
             r_k += gain;
             if (kind == kUnknownFinite) r_unknown += gain;
           }
           if (idx != kOutside) ov[idx] = (stamp << 1) | (hit ? 1u : 0u);
-          if (hit) break;
+          if (hit) {
+            cut = true;
+            break;
+          }
         }
+        if (!cut) visits += ray_tail[ray];
       }
       disc_sum += std::pow(static_cast<double>(s.gamma), static_cast<double>(k - H)) * r_k;  // line 19 term
       reward_sum += r_k;

@@ -9,6 +9,8 @@
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -29,8 +31,45 @@ constexpr std::uint32_t kSkipCode = 0;          // see build_codes()
 struct RayCell {
   std::uint32_t packed;  // (index << 2) | kind; index kOutside outside the grid
   float l;               // prior log-odds (0 for kUnknownNan)
+  float e;               // entropy_table()(l) [bits] (0 for kUnknownNan): once per walk, not per sample
+  std::uint32_t dropped_before;  // repeats of this ray not stored just before this one (partial_sim_rays.cpp)
 };
-inline RayCell make_cell(std::uint32_t index, std::uint32_t kind, float l) { return {(index << 2) | kind, l}; }
+
+// Eq. (5) in bits for finite log-odds, by linear interpolation in a table over [-kTableL, kTableL]
+// (step 1/256; the interpolation error is below 2e-7 bits). Posteriors are clamped to the
+// settings' [min_logodds, max_logodds], which validate() keeps inside the table.
+inline constexpr float kTableL = 20.0f;
+inline constexpr float kTableScale = 256.0f;
+inline constexpr int kTableSize = static_cast<int>(2 * kTableL * kTableScale) + 2;
+
+inline double entropy_bits_exact(double l) {
+  const double p = 1.0 / (1.0 + std::exp(-l));
+  const double q = 1.0 - p;
+  double e = 0.0;
+  if (p > 0.0) e -= p * std::log2(p);
+  if (q > 0.0) e -= q * std::log2(q);
+  return e;
+}
+
+struct EntropyTable {
+  std::array<float, kTableSize> v{};
+  EntropyTable() {
+    for (int i = 0; i < kTableSize; ++i)
+      v[static_cast<std::size_t>(i)] = static_cast<float>(entropy_bits_exact(i / static_cast<double>(kTableScale) - kTableL));
+  }
+  [[nodiscard]] float operator()(float l) const noexcept {
+    const float x = (l + kTableL) * kTableScale;
+    const int i = static_cast<int>(x);
+    const float f = x - static_cast<float>(i);
+    const float a = v[static_cast<std::size_t>(i)], b = v[static_cast<std::size_t>(i) + 1];
+    return a + f * (b - a);
+  }
+};
+
+inline const EntropyTable& entropy_table() {
+  static const EntropyTable table;  // immutable after construction (thread-safe static init)
+  return table;
+}
 
 // Empty-space skipping blocks (see build_skip_blocks()). 2 x 2 cells: a jump lands exactly on the
 // walk (RayWalker::jump_to counts the crossings it passes), so small blocks only cost more jumps;
@@ -49,6 +88,9 @@ struct ThreadScratch {
   std::vector<RayCell> cells;             // all rays of all stages
   std::vector<RayCell> pair_buffer;       // the two rays being walked
   std::vector<std::uint32_t> ray_end;     // end offset of each ray in `cells`
+  std::vector<std::uint32_t> ray_tail;    // cells not stored after each ray's last stored cell (repeats)
+  std::vector<std::uint32_t> sure_ray;    // per cell: the serial of a ray that surely visits it, known free (repeats)
+  std::uint32_t ray_serial = 1;           // the next ray's serial (walks of one thread, never reused until cleared)
   std::vector<Eigen::Vector2f> origins, dirs;
 
   std::uint32_t next_stamp(std::size_t n_cells) {
@@ -67,7 +109,8 @@ struct ThreadScratch {
 /// The empty-space skipping blocks of codes (see partial_sim_rays.cpp).
 void build_skip_blocks(const GridView& grid, std::span<const std::uint8_t> codes, SkipBlocks& sb);
 
-/// The cells of every ray of every stage of trajectory x into ts.cells / ts.ray_end (see partial_sim_rays.cpp).
+/// The cells of every ray of every stage of trajectory x into ts.cells / ts.ray_end / ts.ray_tail,
+/// without the repeats every sample skips (see partial_sim_rays.cpp).
 void precompute_rays(const GridView& grid, std::span<const std::uint8_t> codes, const SkipBlocks& sb, std::span<const Pose2> x,
                      std::span<const SensorSector> sensors, std::span<const std::vector<Eigen::Vector2f>> fans, ThreadScratch& ts);
 
