@@ -13,7 +13,8 @@
 // them at every map update before a decision. One iteration decides once on every state; its
 // (manual) time is the mean decision's wall time, so "Time" is the mean over all the states.
 // Three passes; "decisions": their count; "goal": the fraction of decisions that gave a goal; p50_ms, p99_ms and
-// max_ms: the spread of single decisions' wall times.
+// max_ms: the spread of single decisions' wall times; "cores_busy": the process's CPU time over
+// the wall time while deciding (2 = both threads of Decision/duet busy throughout).
 #include "bench_util.hpp"
 
 #include <duet/runtime/config/profile.hpp>
@@ -23,6 +24,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -87,6 +89,7 @@ void register_decision_loop() {
           return;
         }
         std::size_t goals = 0, decisions = 0;
+        double cpu_s = 0.0, wall_s = 0.0;  // the decisions' process CPU time and wall time
         std::vector<double> ms;  // each decision's wall time: its spread over the states
         for (auto _ : state) {  // one iteration: every state once; its time: the mean decision
           double pass_s = 0.0;
@@ -97,10 +100,15 @@ void register_decision_loop() {
               nav->add_trail(Eigen::Vector2f(st.pose.x, st.pose.y));
               nav->update_map(st.grid, st.pose, st.t_s);
             });
+            timespec c0{}, c1{};
+            clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
             const auto t0 = std::chrono::steady_clock::now();
             arena(impl.threads).execute([&] { nav->decide(st.pose, st.t_s); });
             const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
+            cpu_s += static_cast<double>(c1.tv_sec - c0.tv_sec) + 1e-9 * static_cast<double>(c1.tv_nsec - c0.tv_nsec);
             pass_s += dt;
+            wall_s += dt;
             ms.push_back(1e3 * dt);
             ++decisions;
             goals += nav->goal().has_value();
@@ -109,6 +117,7 @@ void register_decision_loop() {
         }
         state.counters["decisions"] = static_cast<double>(decisions);
         state.counters["states"] = static_cast<double>(s->states.size());
+        state.counters["cores_busy"] = wall_s > 0.0 ? cpu_s / wall_s : 0.0;  // mean busy threads while deciding
         if (!ms.empty()) {
           std::sort(ms.begin(), ms.end());
           auto at = [&](double q) { return ms[std::min(ms.size() - 1, static_cast<std::size_t>(q * static_cast<double>(ms.size())))]; };

@@ -39,6 +39,7 @@ struct Particle {
   float reward_mean = 0.0f; // mean over j of sum_t R_{t,j} (bits)
   float unknown_reward_mean = 0.0f; // the part of reward_mean from cells whose state is unknown (bits)
   std::int64_t visits = 0;
+  std::int64_t stored = 0;  // cells the walks stored (this iteration)
 };
 
 }  // namespace
@@ -300,6 +301,7 @@ PartialSimResult partial_map_simulation(const ObservationModel& model, const Inf
     p.reward_mean = 0.0f;
     p.unknown_reward_mean = 0.0f;
     p.visits = 0;
+    p.stored = 0;
   }
   PartialSimResult result;
   result.goal = robot;
@@ -328,15 +330,20 @@ PartialSimResult partial_map_simulation(const ObservationModel& model, const Inf
         part.reward_mean = 0.0f;
         part.unknown_reward_mean = 0.0f;
         part.visits = 0;
+        part.stored = 0;
         if (!part.valid) {
           part.log_w = -std::numeric_limits<double>::infinity();
           continue;
         }
         precompute_rays(grid, ws.codes, ws.skip, part.x, sensors, fans, ts);
+        part.stored = static_cast<std::int64_t>(ts.cells.size());
         observe_particle(model, sensors, s, phi, rng, ts, part);  // lines 10-19
       }
     });
-    for (const Particle& p : ws.particles) result.cells_visited += p.visits;
+    for (const Particle& p : ws.particles) {
+      result.cells_visited += p.visits;
+      result.cells_stored += p.stored;
+    }
     // Lines 21-23: normalisation (in the log domain, so long products cannot underflow).
     double max_lw = -std::numeric_limits<double>::infinity();
     for (const Particle& p : ws.particles) max_lw = std::max(max_lw, p.log_w);

@@ -12,6 +12,12 @@
 #include <span>
 #include <vector>
 
+namespace duet::detail {
+// Test hook (tests/kernels/test_partial_sim.cpp): false stores the repeats too, the reference
+// the dropping is tested against. Set only while no simulation runs.
+bool partial_sim_drop_repeats = true;
+}  // namespace duet::detail
+
 namespace duet::detail::partial_sim {
 
 // Walks every ray of every stage once (the known part does not depend on j) and stores the cells:
@@ -213,6 +219,7 @@ class RayWalker {
     std::uint32_t* const sure_ray = sure_ray_;
     const std::uint32_t first = walk_first_ray_, ray = ray_id_;
     bool sure = sure_;
+    const bool drop = partial_sim_drop_repeats;
     std::uint32_t dropped = dropped_;
     std::size_t n = n_;
     std::int64_t mx = c.mx, my = c.my, ix = c.ix, iy = c.iy, t_now = t_now_;
@@ -224,7 +231,7 @@ class RayWalker {
       if (code == kSkipCode) break;
       const std::uint32_t kind = code - 1;
       bool store = true;
-      if (kind == kFreeCell) {  // inside: outside cells are kUnknownNan
+      if (kind == kFreeCell && drop) {  // inside: outside cells are kUnknownNan
         const std::uint32_t s = sure_ray[at];
         if (s >= first && s < ray) {  // surely seen (and missed) on an earlier ray of this walk
           store = false;

@@ -15,6 +15,9 @@
 #include <vector>
 
 namespace duet {
+namespace detail {
+extern bool partial_sim_drop_repeats;  // partial_sim_rays.cpp: false stores the repeats too
+}  // namespace detail
 namespace test_partial_sim {
 
 constexpr float kFreeL = -2.0f;  // clamped free (GridUpdateSettings.min_logodds)
@@ -108,6 +111,20 @@ TEST(PartialSim, DoorRoomGoalPointsToTheUnknownSide) {
   EXPECT_GT(r.valid_particles, 0);
 }
 
+// The same decision, bit for bit: goal, particle, rewards, weights, resamples and visits.
+void expect_same_result(const PartialSimResult& a, const PartialSimResult& b) {
+  EXPECT_EQ(a.found, b.found);
+  EXPECT_EQ(a.best_particle, b.best_particle);
+  EXPECT_EQ(a.goal.x, b.goal.x);
+  EXPECT_EQ(a.goal.y, b.goal.y);
+  EXPECT_EQ(a.goal.theta, b.goal.theta);
+  EXPECT_EQ(a.reward_bits, b.reward_bits);
+  EXPECT_EQ(a.unknown_reward_bits, b.unknown_reward_bits);
+  EXPECT_EQ(a.weights, b.weights);
+  EXPECT_EQ(a.resamples, b.resamples);
+  EXPECT_EQ(a.cells_visited, b.cells_visited);
+}
+
 TEST(PartialSim, SameResultWithOneAndTwoThreads) {
   const TestGrid g = door_room();
   Prepared p(g);
@@ -127,15 +144,7 @@ TEST(PartialSim, SameResultWithOneAndTwoThreads) {
     const PartialSimResult r3 = partial_map_simulation(p.model, p.inflated, robot, sensors, s, ws);
     EXPECT_EQ(r3.weights, r2.weights);
   });
-  EXPECT_EQ(r1.found, r2.found);
-  EXPECT_EQ(r1.best_particle, r2.best_particle);
-  EXPECT_EQ(r1.goal.x, r2.goal.x);
-  EXPECT_EQ(r1.goal.y, r2.goal.y);
-  EXPECT_EQ(r1.goal.theta, r2.goal.theta);
-  EXPECT_EQ(r1.reward_bits, r2.reward_bits);
-  EXPECT_EQ(r1.weights, r2.weights);
-  EXPECT_EQ(r1.resamples, r2.resamples);
-  EXPECT_EQ(r1.cells_visited, r2.cells_visited);
+  expect_same_result(r1, r2);
   // A different seed gives a different (valid) answer.
   s.seed = 43;
   PartialSimWorkspace ws;
@@ -274,6 +283,45 @@ TEST(PartialSim, JumpsOverClampedFreeSpaceMissNoCell) {
     EXPECT_EQ(r.cells_visited, crossings) << "theta " << theta;
     const double per_cell = static_cast<double>(entropy_bits(-0.4f)) - static_cast<double>(entropy_bits(-0.8f));
     EXPECT_NEAR(r.reward_bits, per_cell * static_cast<double>(cells.size()), 1e-3 * per_cell) << "theta " << theta;
+  }
+}
+
+// The walks leave out the repeats every sample skips (a known-free cell after a sure visit of
+// it): the whole result - goal, weights, rewards, the visits - is the same as with every cell
+// stored, on grids that mix free cells below the clamp (stored), clamped free space (skipped),
+// never-observed and finite unknown cells and walls, with 1 and 2 threads; and cells are dropped.
+TEST(PartialSim, DroppingRepeatsChangesNothingButTheCellsStored) {
+  struct Restore {
+    ~Restore() { detail::partial_sim_drop_repeats = true; }
+  } restore;
+  for (unsigned seed : {3u, 17u, 29u}) {
+    TestGrid g(400, 400);  // scatter_islands places islands over 400 x 400
+    g.room(20, 20, 380, 380);                                                      // clamped free, walled
+    scatter_islands(g, seed, 2500, [](int i) { return -0.4f * static_cast<float>(1 + i % 4); });  // free, not clamped
+    scatter_islands(g, seed + 1, 300, [](int i) { return i % 3 == 0 ? 0.2f : kUnknown; });        // unknown
+    scatter_islands(g, seed + 2, 60, [](int) { return kOccL; });                                  // obstacles
+    g.fill(110, 110, 130, 130, -1.2f);  // the robot's own patch: free, not clamped
+    Prepared p(g);
+    const Pose2 robot{6.0f, 6.0f, 0.1f * static_cast<float>(seed)};
+    const auto sensors = paper_dual_sensors(30);
+    PartialSimSettings s;
+    s.seed = seed;
+    for (int threads : {1, 2}) {
+      PartialSimResult with, without;
+      tbb::task_arena(threads).execute([&] {
+        PartialSimWorkspace ws;
+        detail::partial_sim_drop_repeats = true;
+        with = partial_map_simulation(p.model, p.inflated, robot, sensors, s, ws);
+        detail::partial_sim_drop_repeats = false;
+        without = partial_map_simulation(p.model, p.inflated, robot, sensors, s, ws);  // same (warm) workspace
+        detail::partial_sim_drop_repeats = true;
+      });
+      SCOPED_TRACE("seed " + std::to_string(seed) + ", " + std::to_string(threads) + " threads");
+      ASSERT_GT(without.valid_particles, 10) << "the rollouts must be valid for the test to mean anything";
+      EXPECT_LT(with.cells_stored, without.cells_stored * 95 / 100) << "repeats must be dropped for the test to mean anything";
+      expect_same_result(with, without);
+      EXPECT_GT(with.cells_visited, with.cells_stored);
+    }
   }
 }
 

@@ -121,6 +121,10 @@ struct PartialSimResult {
   /// Cells processed by the sample walks of lines 10-17 over all iterations (known-free cells at
   /// min_logodds are skipped: their reward is exactly 0 and they never stop a ray).
   std::int64_t cells_visited = 0;
+  /// Cells the walks stored for the samples over all iterations (each read by every sample of
+  /// its iteration). Fewer than the cells walked: repeats that every sample skips are not stored
+  /// (a known-free cell after a sure visit of it; partial_sim_rays.cpp), but cells_visited counts them.
+  std::int64_t cells_stored = 0;
 };
 
 /// Reusable state (overlays and buffers per thread, entropy table); create once and reuse.
