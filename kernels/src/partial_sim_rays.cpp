@@ -1,5 +1,6 @@
 /// @file partial_sim_rays.cpp
-/// Partial map simulation's ray precomputation: cell codes, empty-space skipping blocks and RayWalker.
+/// Partial map simulation's ray precomputation: cell codes, empty-space skipping blocks and RayWalker
+/// (which leaves out the repeats every sample skips).
 #include "partial_sim_rays.hpp"
 
 #include <tbb/blocked_range.h>
@@ -64,18 +65,20 @@ void build_skip_blocks(const GridView& grid, std::span<const std::uint8_t> codes
 
 namespace {
 
-// Repeats: cells every sample passes without effect (lines 13-17 count a cell once per sample): a known-free
-// cell at a later position than a "sure" visit of the same cell. A visit is sure if every cell
-// before it on its ray is known free: a known-free cell is always a miss when counted, and when
-// seen before it was a miss too (the overlay keeps the outcome of a cell's first counted visit,
-// a miss for a known-free cell), so nothing before it can end the ray. After a sure visit of a
-// known-free cell the overlay holds it as seen and missed, so every later visit of it in the same
+// Repeats: cells every sample passes without effect (lines 13-17 count a cell once per sample): a
+// known-free cell at a later position than a "sure" visit of the same cell. A visit is sure if
+// every cell before it on its ray is known free: a known-free cell is always a miss when counted,
+// and when seen before it was a miss too (the overlay keeps the outcome of a cell's first counted
+// visit, a miss for a known-free cell), so nothing before it can end the ray. After a sure visit of
+// a known-free cell the overlay holds it as seen and missed, so every later visit of it in the same
 // sample is skipped ("seen before, missed") without reward or overlay change: the walk does not
 // store those cells, which changes nothing but the visit count, kept by dropped_before and
-// ray_tail. The walks give each ray a serial number (ThreadScratch::ray_serial) and sure_ray
-// keeps, per cell, the ray of a sure visit; two rays are walked side by side, so a cell marked
-// by the later one is marked again by the earlier one, and only marks of earlier rays drop. Measured on
-// Willow's decisions: about half the visits were seen-before misses.
+// ray_tail. The walks give each ray a serial number (ThreadScratch::ray_serial) and sure_ray keeps,
+// per cell, the ray of a sure visit; two rays are walked side by side, so a cell marked by the
+// later one is marked again by the earlier one, and only marks of earlier rays drop. Measured on
+// Willow's decisions: about half the visits were seen-before misses, and about a quarter of the
+// cells the walks stored were such repeats.
+
 // The cells a ray crosses from its sensor to max_range, by a 2D DDA (Amanatides & Woo) on the
 // 64-bit fixed-point times of detail::CellWalk (observation.hpp), jumping over runs of skip cells
 // (SkipBlocks). The step is branch-free (the x-or-y choice is a conditional move on integers: a
