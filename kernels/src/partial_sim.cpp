@@ -196,8 +196,8 @@ void observe_particle(const ObservationModel& model, std::span<const SensorSecto
         // the ray meets an unknown cell (most rays end on a known wall): unknown_left < 0 = not yet.
         const float u = 1.0f - rng.uniform01();  // (0, 1]
         std::int64_t unknown_left = -1;
-        // The visits count the repeats the walk did not store (partial_sim_rays.cpp): those before each cell reached, and
-        // the ray's tail when it is walked to its end.
+        // The visits count the repeats the walk did not store (partial_sim_rays.cpp): those
+        // before each cell reached, and the ray's tail when it is walked to its end.
         bool cut = false;
         for (std::uint32_t c = begin; c < end; ++c) {
           const RayCell cell = cells[c];

@@ -170,11 +170,7 @@ class RayWalker {
           step_indexed(ix, iy, i, mx, my, sx, sy, step_y, dx, dy);
           if (static_cast<std::uint64_t>(ix) >= static_cast<std::uint64_t>(w) ||
               static_cast<std::uint64_t>(iy) >= static_cast<std::uint64_t>(h) || codes[i] != kSkipCode) {
-            c.mx = mx;  // the next advance() handles this cell
-            c.my = my;
-            t_now_ = t_now;
-            c.ix = static_cast<int>(ix);
-            c.iy = static_cast<int>(iy);
+            keep(mx, my, ix, iy, t_now);  // the next advance() handles this cell
             return;
           }
         }
@@ -265,10 +261,15 @@ class RayWalker {
     n_ = n;
     sure_ = sure;
     dropped_ = dropped;
-    c.mx = mx;
-    c.my = my;
-    c.ix = static_cast<int>(ix);
-    c.iy = static_cast<int>(iy);
+    keep(mx, my, ix, iy, t_now);
+  }
+
+  /// Puts the walk state a hot loop kept in locals back into the walk.
+  void keep(std::int64_t mx, std::int64_t my, std::int64_t ix, std::int64_t iy, std::int64_t t_now) noexcept {
+    w_walk_.mx = mx;
+    w_walk_.my = my;
+    w_walk_.ix = static_cast<int>(ix);
+    w_walk_.iy = static_cast<int>(iy);
     t_now_ = t_now;
   }
 
