@@ -31,6 +31,10 @@ inline int floor_int(float x) noexcept {
 
 using namespace detail::partial_sim;  // the precomputed rays (partial_sim_rays.hpp)
 
+// Cells added around the first iteration's rays when the window is built, so that the later
+// iterations' rays (the particles move a little) seldom need another window.
+constexpr int kWindowMargin = 16;
+
 struct Particle {
   std::vector<Twist> u;     // U_{0:H-1}
   std::vector<Pose2> x;     // X_{1:H}
@@ -40,6 +44,8 @@ struct Particle {
   float unknown_reward_mean = 0.0f; // the part of reward_mean from cells whose state is unknown (bits)
   std::int64_t visits = 0;
   std::int64_t stored = 0;  // cells the walks stored (this iteration)
+  detail::Rng rng{0};       // the particle's stream of this iteration, between its rollout and its samples
+  CellBox rays;             // the cells its rays can reach (add_ray_box)
 };
 
 }  // namespace
@@ -47,8 +53,7 @@ struct Particle {
 struct PartialSimWorkspace::Impl {
   tbb::enumerable_thread_specific<ThreadScratch> scratch;
   std::vector<Particle> particles, resampled;
-  std::vector<std::uint8_t> codes;  // per cell, see build_codes()
-  SkipBlocks skip;                   // see build_skip_blocks()
+  Window window;  // the cells the rays of an iteration can reach, see build_window()
 };
 
 PartialSimWorkspace::PartialSimWorkspace() : impl_(std::make_unique<Impl>()) {}
@@ -158,10 +163,9 @@ std::vector<std::vector<Eigen::Vector2f>> robot_fans(std::span<const SensorSecto
 
 // Lines 10-17 and 19 for one particle whose rays are in ts: returns log(prod_j sum_t gamma^(t-H) R_tj)
 // and the mean undiscounted reward.
-void observe_particle(const ObservationModel& model, std::span<const SensorSector> sensors, const PartialSimSettings& s,
-                      int phi, detail::Rng& rng, ThreadScratch& ts, Particle& part) {
+void observe_particle(std::span<const SensorSector> sensors, const PartialSimSettings& s, int phi, detail::Rng& rng,
+                      ThreadScratch& ts, std::size_t n_cells, Particle& part) {
   const EntropyTable& et = entropy_table();
-  const std::size_t n_cells = model.grid().logodds.size();
   const int H = s.stages;
   std::size_t rays_per_stage = 0;
   for (const SensorSector& sec : sensors) rays_per_stage += static_cast<std::size_t>(sec.rays);
@@ -287,8 +291,6 @@ PartialSimResult partial_map_simulation(const ObservationModel& model, const Inf
   }
 
   auto& ws = workspace.impl();
-  build_codes(model, s.min_logodds, ws.codes);
-  build_skip_blocks(grid, ws.codes, ws.skip);
   const std::vector<std::vector<Eigen::Vector2f>> fans = robot_fans(sensors);
   const int N = s.particles, H = s.stages;
   const auto Nz = static_cast<std::size_t>(N), Hz = static_cast<std::size_t>(H);
@@ -312,10 +314,10 @@ PartialSimResult partial_map_simulation(const ObservationModel& model, const Inf
   for (int i = 1; i <= s.iterations; ++i) {  // line 2
     const int phi = s.phi_a * i + s.phi_b;
     tbb::parallel_for(tbb::blocked_range<int>(0, N, 1), [&](const tbb::blocked_range<int>& range) {
-      ThreadScratch& ts = ws.scratch.local();
       for (int n = range.begin(); n != range.end(); ++n) {  // line 3
         Particle& part = ws.particles[static_cast<std::size_t>(n)];
-        detail::Rng rng(detail::stream_seed(s.seed, static_cast<std::uint64_t>(i), static_cast<std::uint64_t>(n)));
+        part.rng = detail::Rng(detail::stream_seed(s.seed, static_cast<std::uint64_t>(i), static_cast<std::uint64_t>(n)));
+        detail::Rng& rng = part.rng;
         for (int k = 0; k < H; ++k) {
           Twist& u = part.u[static_cast<std::size_t>(k)];
           if (i == 1) {  // line 5: zeta_1 uniform over U_range
@@ -331,13 +333,30 @@ PartialSimResult partial_map_simulation(const ObservationModel& model, const Inf
         part.unknown_reward_mean = 0.0f;
         part.visits = 0;
         part.stored = 0;
+        part.rays = CellBox{};
         if (!part.valid) {
           part.log_w = -std::numeric_limits<double>::infinity();
           continue;
         }
-        precompute_rays(grid, ws.codes, ws.skip, part.x, sensors, fans, ts);
+        add_ray_box(grid, part.x, sensors, part.rays);
+      }
+    });
+    // The window of the iteration's rays: built from this call's map at the first iteration, and
+    // again only when a later iteration's rays leave it (a margin makes that rare).
+    CellBox reach;
+    for (const Particle& p : ws.particles) reach.add(p.rays);
+    if (i == 1 || !ws.window.box.contains(reach)) {
+      if (!reach.empty()) reach = CellBox{reach.x0 - kWindowMargin, reach.y0 - kWindowMargin, reach.x1 + kWindowMargin, reach.y1 + kWindowMargin};
+      build_window(model, s.min_logodds, reach, ws.window);
+    }
+    tbb::parallel_for(tbb::blocked_range<int>(0, N, 1), [&](const tbb::blocked_range<int>& range) {
+      ThreadScratch& ts = ws.scratch.local();
+      for (int n = range.begin(); n != range.end(); ++n) {
+        Particle& part = ws.particles[static_cast<std::size_t>(n)];
+        if (!part.valid) continue;
+        precompute_rays(grid, ws.window, part.x, sensors, fans, ts);
         part.stored = static_cast<std::int64_t>(ts.cells.size());
-        observe_particle(model, sensors, s, phi, rng, ts, part);  // lines 10-19
+        observe_particle(sensors, s, phi, part.rng, ts, ws.window.cells(), part);  // lines 10-19
       }
     });
     for (const Particle& p : ws.particles) {

@@ -1,16 +1,19 @@
 /// @file partial_sim_rays.cpp
-/// Partial map simulation's ray precomputation: cell codes, empty-space skipping blocks and RayWalker
-/// (which leaves out the repeats every sample skips).
+/// Partial map simulation's ray precomputation: the window of cells the rays can reach (codes,
+/// priors, empty-space skipping blocks) and RayWalker (which leaves out the repeats every sample skips).
 #include "partial_sim_rays.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+
+#include <duet/kernels/error.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace duet::detail {
@@ -25,11 +28,12 @@ namespace duet::detail::partial_sim {
 // known-occupied cells end a ray; unknown and free cells are stored with their kind.
 // Empty-space skipping for the walks: the grid is cut into kBlock x kBlock blocks; dist[b] is
 // the chessboard distance, in blocks, from block b to the nearest block that holds a cell that is
-// not kSkipCode (or lies on the grid's border). From a cell of a block with dist D >= 2 every cell
+// not kSkipCode (or lies on the window's border). From a cell of a block with dist D >= 2 every cell
 // within kBlock * (D - 1) cells (chessboard) is a skip cell, so a ray can jump that far at once.
 
-void build_skip_blocks(const GridView& grid, std::span<const std::uint8_t> codes, SkipBlocks& sb) {
-  const int w = grid.width, h = grid.height;
+namespace {
+
+void build_skip_blocks(int w, int h, std::span<const std::uint8_t> codes, SkipBlocks& sb) {
   sb.bw = (w + kBlock - 1) / kBlock;
   sb.bh = (h + kBlock - 1) / kBlock;
   const auto nb = static_cast<std::size_t>(sb.bw) * static_cast<std::size_t>(sb.bh);
@@ -63,7 +67,13 @@ void build_skip_blocks(const GridView& grid, std::span<const std::uint8_t> codes
       if (at(x, y)) set(x, y, std::min({at(x, y), at(x + 1, y) + 1, at(x + 1, y + 1) + 1, at(x, y + 1) + 1, at(x - 1, y + 1) + 1}));
 }
 
-namespace {
+/// The margin in cells around a fan's origin that holds every cell its rays cross: a cell crossed
+/// at a time t <= max_range is within max_range / resolution + 1 cells of the origin's cell along
+/// each axis (+ 1 for CellWalk's choice of the lower cell on a boundary). add_ray_box() adds one
+/// cell more, so that rounding in its own origin computation cannot matter.
+int ray_reach_cells(float max_range_m, float resolution_m) {
+  return static_cast<int>(std::ceil(static_cast<double>(max_range_m) / static_cast<double>(resolution_m))) + 2;
+}
 
 // Repeats: cells every sample passes without effect (lines 13-17 count a cell once per sample): a
 // known-free cell at a later position than a "sure" visit of the same cell. A visit is sure if
@@ -92,10 +102,9 @@ namespace {
 // Resumable (one cell per advance()), so that two rays can be walked in one loop.
 class RayWalker {
  public:
-  RayWalker(const GridView& grid, std::span<const std::uint8_t> codes, const SkipBlocks& sb, std::uint32_t* sure_ray,
-            std::uint32_t walk_first_ray)
-      : grid_(grid), w_(static_cast<unsigned>(grid.width)), h_(static_cast<unsigned>(grid.height)),
-        logodds_(grid.logodds.data()), codes_(codes.data()), sb_(sb), sure_ray_(sure_ray), walk_first_ray_(walk_first_ray) {}
+  RayWalker(const GridView& grid, const Window& win, std::uint32_t* sure_ray, std::uint32_t walk_first_ray)
+      : grid_(grid), win_(win), w_(static_cast<unsigned>(win.w)), prior_(win.prior.data()), codes_(win.codes.data()),
+        sb_(win.skip), sure_ray_(sure_ray), walk_first_ray_(walk_first_ray) {}
 
   /// Starts ray number ray_id (ThreadScratch::ray_serial); its cells are appended to out (which
   /// must have room for max_cells()).
@@ -106,8 +115,15 @@ class RayWalker {
     ray_id_ = ray_id;
     sure_ = true;
     dropped_ = 0;
-    done_ = !w_walk_.init(grid_, o, d, 0.0f, max_range);
+    done_ = !w_walk_.init(grid_, o, d, 0.0f, max_range);  // on the grid: the same cells as every other walk
     if (done_) return;
+    w_walk_.ix -= win_.box.x0;  // to the window's cells (exact)
+    w_walk_.iy -= win_.box.y0;
+    const int reach = ray_reach_cells(max_range, grid_.resolution_m);
+    if (w_walk_.ix < reach || w_walk_.iy < reach || w_walk_.ix + reach >= win_.w || w_walk_.iy + reach >= win_.h)
+      fail(ErrorCode::kInternal, "partial_map_simulation: a ray from window cell (" + std::to_string(w_walk_.ix) + ", " +
+                                     std::to_string(w_walk_.iy) + ") can leave the window of " + std::to_string(win_.w) + " x " +
+                                     std::to_string(win_.h) + " cells");
     const double scale = 1.0 / w_walk_.inv_scale;
     t_min_ = static_cast<std::int64_t>(static_cast<double>(min_range) * scale + 0.5);
     jump_unit_ = static_cast<double>(grid_.resolution_m) * scale;  // one cell of travel [fixed point]
@@ -132,9 +148,8 @@ class RayWalker {
   /// Processes the current cell and moves to the next one.
   void advance() {
     detail::CellWalk& c = w_walk_;
-    const bool inside = static_cast<unsigned>(c.ix) < w_ && static_cast<unsigned>(c.iy) < h_;
-    const std::size_t idx = inside ? static_cast<std::size_t>(c.iy) * w_ + static_cast<unsigned>(c.ix) : 0;
-    const std::uint32_t code = inside ? codes_[idx] : kUnknownNan + 1;
+    const std::size_t idx = static_cast<std::size_t>(c.iy) * w_ + static_cast<unsigned>(c.ix);  // in the window (start())
+    const std::uint32_t code = codes_[idx];
     if (!observing_) {
       const std::int64_t t_exit = c.next();
       observing_ = t_exit > t_min_ || t_exit >= c.end;
@@ -153,13 +168,12 @@ class RayWalker {
         observing_ = false;
         return;
       }
-      if (inside) {  // tight loop over the following skip cells (most of the walk in known space)
-        const std::int64_t sx = c.sx, sy = c.sy, step_y = c.sy * static_cast<std::int64_t>(w_);
+      {  // tight loop over the following skip cells (most of the walk in known space)
+        const std::int64_t sx = c.sx, step_y = c.sy * static_cast<std::int64_t>(w_);
         const std::int64_t dx = c.dx, dy = c.dy, end = c.end;
-        const std::int64_t w = w_, h = h_;
         const std::uint8_t* const codes = codes_;
         auto i = static_cast<std::int64_t>(idx);
-        std::int64_t mx = c.mx, my = c.my, ix = c.ix, iy = c.iy, t_now = t_now_;
+        std::int64_t mx = c.mx, my = c.my, t_now = t_now_;
         for (;;) {
           const std::int64_t tn = mx < my ? mx : my;
           if (tn >= end) {
@@ -167,10 +181,9 @@ class RayWalker {
             return;
           }
           t_now = tn;
-          step_indexed(ix, iy, i, mx, my, sx, sy, step_y, dx, dy);
-          if (static_cast<std::uint64_t>(ix) >= static_cast<std::uint64_t>(w) ||
-              static_cast<std::uint64_t>(iy) >= static_cast<std::uint64_t>(h) || codes[i] != kSkipCode) {
-            keep(mx, my, ix, iy, t_now);  // the next advance() handles this cell
+          step_indexed(i, mx, my, sx, step_y, dx, dy);
+          if (codes[i] != kSkipCode) {
+            keep(mx, my, i, t_now);  // the next advance() handles this cell
             return;
           }
         }
@@ -192,13 +205,15 @@ class RayWalker {
   }
 
  private:
-  /// detail::CellWalk::step on locals that also keep the cell's index i (= iy * w + ix; step_y =
-  /// sy * w): the hot loops of advance() and store_run().
-  static void step_indexed(std::int64_t& ix, std::int64_t& iy, std::int64_t& i, std::int64_t& mx, std::int64_t& my,
-                           std::int64_t sx, std::int64_t sy, std::int64_t step_y, std::int64_t dx, std::int64_t dy) noexcept {
+  /// detail::CellWalk::step on locals, on the cell's window index i = iy * w + ix alone (step_y =
+  /// sy * w; keep() gives ix and iy back): the hot loops of advance() and store_run(), which then
+  /// keep fewer values in registers.
+  static void step_indexed(std::int64_t& i, std::int64_t& mx, std::int64_t& my, std::int64_t sx, std::int64_t step_y,
+                           std::int64_t dx, std::int64_t dy) noexcept {
     const bool bx = mx <= my, by = my <= mx;  // both on a tie
     i += (bx ? sx : 0) + (by ? step_y : 0);
-    detail::CellWalk::step(ix, iy, mx, my, sx, sy, dx, dy);
+    mx += bx ? dx : 0;
+    my += by ? dy : 0;
   }
 
   /// Stores the current cell (observed, not a skip cell) and those after it, in a loop over
@@ -208,42 +223,38 @@ class RayWalker {
   /// (measured on Willow: ~35 of a ray's ~42 cells are stored).
   void store_run() {
     detail::CellWalk& c = w_walk_;
-    const std::int64_t sx = c.sx, sy = c.sy, step_y = c.sy * static_cast<std::int64_t>(w_);
+    const std::int64_t sx = c.sx, step_y = c.sy * static_cast<std::int64_t>(w_);
     const std::int64_t dx = c.dx, dy = c.dy, end = c.end;
-    const auto w = static_cast<std::uint64_t>(w_), h = static_cast<std::uint64_t>(h_);
     const std::uint8_t* const codes = codes_;
-    const float* const logodds = logodds_;
+    const Prior* const prior = prior_;
     RayCell* const out = out_;
-    const EntropyTable& et = entropy_table();
     std::uint32_t* const sure_ray = sure_ray_;
     const std::uint32_t first = walk_first_ray_, ray = ray_id_;
     bool sure = sure_;
     const bool drop = partial_sim_drop_repeats;
     std::uint32_t dropped = dropped_;
     std::size_t n = n_;
-    std::int64_t mx = c.mx, my = c.my, ix = c.ix, iy = c.iy, t_now = t_now_;
-    std::int64_t i = iy * static_cast<std::int64_t>(w) + ix;  // read only while inside (a ray may enter the grid)
+    std::int64_t mx = c.mx, my = c.my, t_now = t_now_;
+    std::int64_t i = static_cast<std::int64_t>(c.iy) * static_cast<std::int64_t>(w_) + c.ix;
     for (;;) {
-      const bool inside = static_cast<std::uint64_t>(ix) < w && static_cast<std::uint64_t>(iy) < h;
-      const std::int64_t at = inside ? i : 0;
-      const std::uint32_t code = inside ? codes[at] : kUnknownNan + 1;
+      const std::uint32_t code = codes[i];
       if (code == kSkipCode) break;
-      const std::uint32_t kind = code - 1;
+      const std::uint32_t kind = kind_of(code);
       bool store = true;
-      if (kind == kFreeCell && drop) {  // inside: outside cells are kUnknownNan
-        const std::uint32_t s = sure_ray[at];
+      if (kind == kFreeCell && drop) {  // a cell of the grid (kOutsideCode is kUnknownNan)
+        const std::uint32_t s = sure_ray[i];
         if (s >= first && s < ray) {  // surely seen (and missed) on an earlier ray of this walk
           store = false;
           ++dropped;
         } else if (sure) {
-          sure_ray[at] = ray;  // s is from an older walk, or from the later ray walked beside this one
+          sure_ray[i] = ray;  // s is from an older walk, or from the later ray walked beside this one
         }
       } else {
         sure = false;
       }
       if (store) {
-        const float l = kind == kUnknownNan ? 0.0f : logodds[at];
-        out[n++] = {((inside ? static_cast<std::uint32_t>(at) : kOutside) << 2) | kind, l, kind == kUnknownNan ? 0.0f : et(l), dropped};
+        const Prior p = prior[i];
+        out[n++] = {((code == kOutsideCode ? kOutside : static_cast<std::uint32_t>(i)) << 2) | kind, p.l, p.e, dropped};
         dropped = 0;
       }
       if (kind == kOccupiedCell) {
@@ -256,20 +267,21 @@ class RayWalker {
         break;
       }
       t_now = tn;
-      step_indexed(ix, iy, i, mx, my, sx, sy, step_y, dx, dy);
+      step_indexed(i, mx, my, sx, step_y, dx, dy);
     }
     n_ = n;
     sure_ = sure;
     dropped_ = dropped;
-    keep(mx, my, ix, iy, t_now);
+    keep(mx, my, i, t_now);
   }
 
-  /// Puts the walk state a hot loop kept in locals back into the walk.
-  void keep(std::int64_t mx, std::int64_t my, std::int64_t ix, std::int64_t iy, std::int64_t t_now) noexcept {
+  /// Puts the walk state a hot loop kept in locals (i: the window index) back into the walk.
+  void keep(std::int64_t mx, std::int64_t my, std::int64_t i, std::int64_t t_now) noexcept {
+    const auto u = static_cast<std::uint64_t>(i);  // >= 0: the walk is in the window
     w_walk_.mx = mx;
     w_walk_.my = my;
-    w_walk_.ix = static_cast<int>(ix);
-    w_walk_.iy = static_cast<int>(iy);
+    w_walk_.iy = static_cast<int>(u / w_);
+    w_walk_.ix = static_cast<int>(u - static_cast<std::uint64_t>(w_walk_.iy) * w_);
     t_now_ = t_now;
   }
 
@@ -294,8 +306,9 @@ class RayWalker {
   }
 
   const GridView& grid_;
-  unsigned w_, h_;
-  const float* logodds_;
+  const Window& win_;
+  unsigned w_;
+  const Prior* prior_;
   const std::uint8_t* codes_;
   const SkipBlocks& sb_;
   std::uint32_t* sure_ray_;
@@ -313,22 +326,85 @@ class RayWalker {
 
 }  // namespace
 
-void precompute_rays(const GridView& grid, std::span<const std::uint8_t> codes, const SkipBlocks& sb, std::span<const Pose2> x,
-                     std::span<const SensorSector> sensors, std::span<const std::vector<Eigen::Vector2f>> fans, ThreadScratch& ts) {
+void add_ray_box(const GridView& grid, std::span<const Pose2> x, std::span<const SensorSector> sensors, CellBox& box) {
+  const double res = grid.resolution_m;
+  for (const Pose2& pose : x) {
+    const float c = std::cos(pose.theta), sn = std::sin(pose.theta);  // as precompute_rays()
+    for (const SensorSector& sec : sensors) {
+      const Eigen::Vector2f o = detail::fan_origin(pose, sec, c, sn);
+      const double px = (static_cast<double>(o.x()) - static_cast<double>(grid.origin.x())) / res;
+      const double py = (static_cast<double>(o.y()) - static_cast<double>(grid.origin.y())) / res;
+      if (!(std::fabs(px) < 1e9) || !(std::fabs(py) < 1e9)) continue;  // CellWalk::init refuses it: nothing is walked
+      const int ix = static_cast<int>(std::floor(px)), iy = static_cast<int>(std::floor(py));
+      const int r = ray_reach_cells(sec.max_range_m, grid.resolution_m) + 1;
+      box.add(CellBox{ix - r, iy - r, ix + r, iy + r});
+    }
+  }
+}
+
+// The window's per-cell codes: kind + 1, or kSkipCode for a known-free cell at exactly
+// min_logodds: a miss keeps it at the clamp for any noise (l_ISM < 0), so its reward is exactly 0
+// and it never stops a ray - leaving it out changes no result and saves most of the work in
+// well-observed space. Cells outside the grid: kOutsideCode.
+void build_window(const ObservationModel& model, float clamp_min, const CellBox& box, Window& win) {
+  if (box.cells() >= (std::int64_t{1} << 30))
+    fail(ErrorCode::kOutOfRange, "partial_map_simulation: the simulated rays reach a box of " + std::to_string(box.x1 - box.x0 + 1) +
+                                     " x " + std::to_string(box.y1 - box.y0 + 1) +
+                                     " cells, 2^30 or more (lower the sensors' max_range_m or the motions' reach)");
+  const GridView& grid = model.grid();
+  const auto logodds = grid.logodds;
+  const auto states = model.states();
+  const EntropyTable& et = entropy_table();
+  win.box = box;
+  win.w = box.empty() ? 0 : box.x1 - box.x0 + 1;
+  win.h = box.empty() ? 0 : box.y1 - box.y0 + 1;
+  win.codes.resize(win.cells());
+  win.prior.resize(win.cells());
+  tbb::parallel_for(tbb::blocked_range<int>(0, win.h, 16), [&](const tbb::blocked_range<int>& rg) {
+    for (int y = rg.begin(); y != rg.end(); ++y) {
+      const int gy = box.y0 + y;
+      const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(win.w);
+      for (int x = 0; x < win.w; ++x) {
+        const int gx = box.x0 + x;
+        std::uint8_t& code = win.codes[row + static_cast<std::size_t>(x)];
+        Prior& prior = win.prior[row + static_cast<std::size_t>(x)];
+        if (gx < 0 || gy < 0 || gx >= grid.width || gy >= grid.height) {
+          code = static_cast<std::uint8_t>(kOutsideCode);
+          prior = Prior{};
+          continue;
+        }
+        const std::size_t i = static_cast<std::size_t>(gy) * static_cast<std::size_t>(grid.width) + static_cast<std::size_t>(gx);
+        const float l = logodds[i];
+        std::uint32_t kind;
+        switch (states[i]) {
+          case CellState::kOccupied: kind = kOccupiedCell; break;
+          case CellState::kFree: kind = kFreeCell; break;
+          default: kind = std::isnan(l) ? kUnknownNan : kUnknownFinite; break;
+        }
+        code = static_cast<std::uint8_t>(kind == kFreeCell && l == clamp_min ? kSkipCode : kind + 1);
+        prior = kind == kUnknownNan ? Prior{} : Prior{l, et(l)};
+      }
+    }
+  });
+  build_skip_blocks(win.w, win.h, win.codes, win.skip);
+}
+
+void precompute_rays(const GridView& grid, const Window& win, std::span<const Pose2> x, std::span<const SensorSector> sensors,
+                     std::span<const std::vector<Eigen::Vector2f>> fans, ThreadScratch& ts) {
   ts.cells.clear();
   ts.ray_end.clear();
   ts.ray_tail.clear();
   std::size_t rays = 0;
   for (const SensorSector& sec : sensors) rays += static_cast<std::size_t>(sec.rays);
   rays *= x.size();
-  if (ts.sure_ray.size() != grid.cell_count() || ts.ray_serial > 0xFFFFFFFFu - rays) {  // new grid, or the serial would wrap
-    ts.sure_ray.assign(grid.cell_count(), 0u);
+  if (ts.sure_ray.size() < win.cells() || ts.ray_serial > 0xFFFFFFFFu - rays) {  // a larger window, or the serial would wrap
+    ts.sure_ray.assign(win.cells(), 0u);  // (marks of older walks are below their serials: another window needs no clearing)
     ts.ray_serial = 1;
   }
   const std::uint32_t first = ts.ray_serial;
   ts.ray_serial += static_cast<std::uint32_t>(rays);
   std::uint32_t ray_id = first;
-  RayWalker a(grid, codes, sb, ts.sure_ray.data(), first), b(grid, codes, sb, ts.sure_ray.data(), first);
+  RayWalker a(grid, win, ts.sure_ray.data(), first), b(grid, win, ts.sure_ray.data(), first);
   for (const Pose2& pose : x) {
     const float c = std::cos(pose.theta), sn = std::sin(pose.theta);
     for (std::size_t si = 0; si < sensors.size(); ++si) {
@@ -360,28 +436,6 @@ void precompute_rays(const GridView& grid, std::span<const std::uint8_t> codes, 
       }
     }
   }
-}
-
-// Per-cell code of the precomputed walks: kind + 1, or kSkipCode for a known-free cell at exactly
-// min_logodds: a miss keeps it at the clamp for any noise (l_ISM < 0), so its reward is exactly 0
-// and it never stops a ray - leaving it out changes no result and saves most of the work in
-// well-observed space.
-void build_codes(const ObservationModel& model, float clamp_min, std::vector<std::uint8_t>& codes) {
-  const auto logodds = model.grid().logodds;
-  const auto states = model.states();
-  codes.resize(logodds.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, logodds.size(), 1 << 14), [&](const tbb::blocked_range<std::size_t>& rg) {
-    for (std::size_t i = rg.begin(); i != rg.end(); ++i) {
-      const float l = logodds[i];
-      std::uint32_t kind;
-      switch (states[i]) {
-        case CellState::kOccupied: kind = kOccupiedCell; break;
-        case CellState::kFree: kind = kFreeCell; break;
-        default: kind = std::isnan(l) ? kUnknownNan : kUnknownFinite; break;
-      }
-      codes[i] = static_cast<std::uint8_t>(kind == kFreeCell && l == clamp_min ? kSkipCode : kind + 1);
-    }
-  });
 }
 
 }  // namespace duet::detail::partial_sim

@@ -1,7 +1,8 @@
 #pragma once
-// Internal: the precomputed rays of partial map simulation (Procedure 1, partial_sim.cpp): per-cell
-// codes, empty-space skipping blocks and the walks that store each ray's cells (partial_sim_rays.cpp),
-// with the per-thread scratch they fill. What is read per cell (RayCell, the kinds) is inline here.
+// Internal: the precomputed rays of partial map simulation (Procedure 1, partial_sim.cpp): the window
+// of cells an iteration's rays can reach (per-cell codes, priors and empty-space skipping blocks)
+// and the walks that store each ray's cells (partial_sim_rays.cpp), with the per-thread scratch
+// they fill. What is read per cell (RayCell, the kinds) is inline here.
 #include <duet/kernels/grid_view.hpp>
 #include <duet/kernels/motion_model.hpp>
 #include <duet/kernels/observation.hpp>
@@ -26,10 +27,16 @@ enum : std::uint32_t {
   kOccupiedCell = 3,     // known occupied: a hit, ends the ray; reward from l
 };
 constexpr std::uint32_t kOutside = 0x3FFFFFFFu;  // index of a cell outside the grid
-constexpr std::uint32_t kSkipCode = 0;          // see build_codes()
+// A window cell's code (Window::codes): kSkipCode, kind + 1 for a cell of the grid, or
+// kOutsideCode for a cell outside the grid (a never-observed cell that the overlay cannot stamp).
+// (code - 1) & 3 is the kind of every code but kSkipCode.
+constexpr std::uint32_t kSkipCode = 0;          // see build_window()
+constexpr std::uint32_t kOutsideCode = kUnknownNan + 5;
+constexpr std::uint32_t kind_of(std::uint32_t code) noexcept { return (code - 1) & 3u; }
+static_assert(kind_of(kOutsideCode) == kUnknownNan);
 
 struct RayCell {
-  std::uint32_t packed;  // (index << 2) | kind; index kOutside outside the grid
+  std::uint32_t packed;  // (index << 2) | kind: the window's index (Window), kOutside outside the grid
   float l;               // prior log-odds (0 for kUnknownNan)
   float e;               // entropy_table()(l) [bits] (0 for kUnknownNan): once per walk, not per sample
   std::uint32_t dropped_before;  // repeats of this ray not stored just before this one (partial_sim_rays.cpp)
@@ -82,6 +89,46 @@ struct SkipBlocks {
   std::vector<std::uint8_t> dist;
 };
 
+/// A box of grid cells, bounds included (it may reach outside the grid); empty while x1 < x0.
+struct CellBox {
+  int x0 = 0, y0 = 0, x1 = -1, y1 = -1;
+  [[nodiscard]] bool empty() const noexcept { return x1 < x0 || y1 < y0; }
+  [[nodiscard]] bool contains(const CellBox& b) const noexcept {
+    return b.empty() || (!empty() && b.x0 >= x0 && b.y0 >= y0 && b.x1 <= x1 && b.y1 <= y1);
+  }
+  void add(const CellBox& b) noexcept {
+    if (b.empty()) return;
+    if (empty()) {
+      *this = b;
+      return;
+    }
+    x0 = std::min(x0, b.x0), y0 = std::min(y0, b.y0), x1 = std::max(x1, b.x1), y1 = std::max(y1, b.y1);
+  }
+  [[nodiscard]] std::int64_t cells() const noexcept {
+    return empty() ? 0 : (std::int64_t{x1} - x0 + 1) * (std::int64_t{y1} - y0 + 1);
+  }
+};
+
+/// A cell's prior as the samples read it: l (log-odds; 0 for a never-observed cell or one outside
+/// the grid) and e = entropy_table()(l) [bits] (0 for those), computed once per window cell.
+struct Prior {
+  float l = 0.0f, e = 0.0f;
+};
+
+/// The cells one iteration's rays can reach (build_window()): window cell (x, y), index
+/// y * w + x, is grid cell (box.x0 + x, box.y0 + y). Every ray walked lies inside with a margin
+/// (RayWalker checks it), so the walks test no bounds, and the per-thread arrays the walks and
+/// samples index (ThreadScratch::overlay, sure_ray) are the window's size, which is much smaller
+/// than the grid's and stays in cache.
+struct Window {
+  CellBox box;
+  int w = 0, h = 0;
+  std::vector<std::uint8_t> codes;  // per window cell (kSkipCode, kind + 1, kOutsideCode)
+  std::vector<Prior> prior;         // per window cell
+  SkipBlocks skip;                  // over codes (build_skip_blocks)
+  [[nodiscard]] std::size_t cells() const noexcept { return static_cast<std::size_t>(w) * static_cast<std::size_t>(h); }
+};
+
 struct ThreadScratch {
   std::vector<std::uint32_t> overlay;  // per cell: (stamp << 1) | sampled occupied
   std::uint32_t stamp = 0;
@@ -94,7 +141,7 @@ struct ThreadScratch {
   std::vector<Eigen::Vector2f> origins, dirs;
 
   std::uint32_t next_stamp(std::size_t n_cells) {
-    if (overlay.size() != n_cells) {
+    if (overlay.size() < n_cells) {  // (stamps are unique per sample, so a window of other cells needs no clearing)
       overlay.assign(n_cells, 0);
       stamp = 0;
     }
@@ -106,15 +153,18 @@ struct ThreadScratch {
   }
 };
 
-/// The empty-space skipping blocks of codes (see partial_sim_rays.cpp).
-void build_skip_blocks(const GridView& grid, std::span<const std::uint8_t> codes, SkipBlocks& sb);
+/// Adds to box the cells within reach of the fans of `sensors` at the poses x (the window margin
+/// RayWalker checks: every cell within ceil(max_range / resolution) + 2 cells of a fan's origin).
+void add_ray_box(const GridView& grid, std::span<const Pose2> x, std::span<const SensorSector> sensors, CellBox& box);
+
+/// Fills win for box (codes, priors, skipping blocks; see partial_sim_rays.cpp). Throws
+/// Error(kOutOfRange) for a box of 2^30 cells or more.
+void build_window(const ObservationModel& model, float clamp_min, const CellBox& box, Window& win);
 
 /// The cells of every ray of every stage of trajectory x into ts.cells / ts.ray_end / ts.ray_tail,
-/// without the repeats every sample skips (see partial_sim_rays.cpp).
-void precompute_rays(const GridView& grid, std::span<const std::uint8_t> codes, const SkipBlocks& sb, std::span<const Pose2> x,
-                     std::span<const SensorSector> sensors, std::span<const std::vector<Eigen::Vector2f>> fans, ThreadScratch& ts);
-
-/// The per-cell codes of the precomputed walks (see partial_sim_rays.cpp).
-void build_codes(const ObservationModel& model, float clamp_min, std::vector<std::uint8_t>& codes);
+/// without the repeats every sample skips (see partial_sim_rays.cpp). The rays must lie in win
+/// (add_ray_box() of the same poses): else Error(kInternal).
+void precompute_rays(const GridView& grid, const Window& win, std::span<const Pose2> x, std::span<const SensorSector> sensors,
+                     std::span<const std::vector<Eigen::Vector2f>> fans, ThreadScratch& ts);
 
 }  // namespace duet::detail::partial_sim
