@@ -3,6 +3,7 @@
 #include <duet/kernels/partial_sim.hpp>
 
 #include "partial_sim_rays.hpp"
+#include "partial_sim_samples.hpp"
 #include "random.hpp"
 
 #include <tbb/blocked_range.h>
@@ -161,104 +162,17 @@ std::vector<std::vector<Eigen::Vector2f>> robot_fans(std::span<const SensorSecto
   return fans;
 }
 
-// Lines 10-17 and 19 for one particle whose rays are in ts: returns log(prod_j sum_t gamma^(t-H) R_tj)
-// and the mean undiscounted reward.
+// Lines 10-17 and 19 for one particle whose rays are in ts (partial_sim_samples.cpp): adds
+// log(prod_j sum_t gamma^(t-H) R_tj) to its log-weight and keeps the mean undiscounted reward.
 void observe_particle(std::span<const SensorSector> sensors, const PartialSimSettings& s, int phi, detail::Rng& rng,
                       ThreadScratch& ts, std::size_t n_cells, Particle& part) {
-  const EntropyTable& et = entropy_table();
-  const int H = s.stages;
   std::size_t rays_per_stage = 0;
   for (const SensorSector& sec : sensors) rays_per_stage += static_cast<std::size_t>(sec.rays);
-  const float inv_log_q = 1.0f / std::log1p(-s.unknown_hit_probability);
-
-  double log_w = 0.0;
-  double reward_sum = 0.0, unknown_sum = 0.0;
-  std::int64_t visits = 0;
-  // The walks' arrays and bounds in locals: read through ts and s, the compiler reloaded them per
-  // cell (seen in the profile).
-  const RayCell* const cells = ts.cells.data();
-  const float l_min = s.min_logodds, l_max = s.max_logodds;
-  const std::uint32_t* const ray_end = ts.ray_end.data();
-  const std::uint32_t* const ray_tail = ts.ray_tail.data();
-  for (int j = 0; j < phi; ++j) {
-    const std::uint32_t stamp = ts.next_stamp(n_cells);
-    std::uint32_t* const ov = ts.overlay.data();
-    double disc_sum = 0.0;
-    for (int k = 0; k < H; ++k) {
-      const float delta = s.ism_noise_logodds > 0.0f ? rng.uniform(-s.ism_noise_logodds, s.ism_noise_logodds) : 0.0f;
-      const float l_hit = s.hit_logodds + delta, l_miss = s.miss_logodds + delta;  // line 14
-      // Lines 15-16 for a never-observed cell (prior 0, E = 1 bit), the same for all of them.
-      const float r_hit_nan = 1.0f - et(std::clamp(l_hit, s.min_logodds, s.max_logodds));
-      const float r_miss_nan = 1.0f - et(std::clamp(l_miss, s.min_logodds, s.max_logodds));
-      float r_k = 0.0f, r_unknown = 0.0f;
-      for (std::size_t r = 0; r < rays_per_stage; ++r) {
-        const std::size_t ray = static_cast<std::size_t>(k) * rays_per_stage + r;
-        const std::uint32_t begin = ray == 0 ? 0u : ray_end[ray - 1];
-        const std::uint32_t end = ray_end[ray];
-        // z ~ chi (line 13): the number of unknown cells passed before a sampled hit is geometric.
-        // u is drawn for every ray (the stream does not depend on the cells), its log only when
-        // the ray meets an unknown cell (most rays end on a known wall): unknown_left < 0 = not yet.
-        const float u = 1.0f - rng.uniform01();  // (0, 1]
-        std::int64_t unknown_left = -1;
-        // The visits count the repeats the walk did not store (partial_sim_rays.cpp): those
-        // before each cell reached, and the ray's tail when it is walked to its end.
-        bool cut = false;
-        for (std::uint32_t c = begin; c < end; ++c) {
-          const RayCell cell = cells[c];
-          const std::uint32_t kind = cell.packed & 3u;
-          const std::uint32_t idx = cell.packed >> 2;
-          visits += 1 + static_cast<std::int64_t>(cell.dropped_before);
-          if (idx != kOutside) {
-            const std::uint32_t o = ov[idx];
-            if ((o >> 1) == stamp) {  // observed earlier in this sample: not counted again
-              if (o & 1u) {           // sampled occupied: stops this ray too
-                cut = true;
-                break;
-              }
-              continue;
-            }
-          }
-          bool hit;
-          if (kind == kOccupiedCell) {
-            hit = true;
-          } else if (kind == kFreeCell) {
-            hit = false;
-          } else {
-            if (unknown_left < 0) {
-              const float g = std::log(u) * inv_log_q;  // >= 0: truncation is the floor
-              unknown_left = g < 1e9f ? static_cast<std::int64_t>(g) : std::numeric_limits<std::int64_t>::max();
-            }
-            hit = unknown_left == 0;
-            --unknown_left;
-          }
-          if (kind == kUnknownNan) {
-            const float gain = hit ? r_hit_nan : r_miss_nan;  // 1 bit - E(clamp(l_ISM))
-            r_k += gain;
-            r_unknown += gain;
-          } else {
-            const float post = std::clamp(cell.l + (hit ? l_hit : l_miss), l_min, l_max);  // line 15
-            const float gain = cell.e - et(post);  // line 16 (cell.e = E(l_prior), from the walk)
-            r_k += gain;
-            if (kind == kUnknownFinite) r_unknown += gain;
-          }
-          if (idx != kOutside) ov[idx] = (stamp << 1) | (hit ? 1u : 0u);
-          if (hit) {
-            cut = true;
-            break;
-          }
-        }
-        if (!cut) visits += ray_tail[ray];
-      }
-      disc_sum += std::pow(static_cast<double>(s.gamma), static_cast<double>(k - H)) * r_k;  // line 19 term
-      reward_sum += r_k;
-      unknown_sum += r_unknown;
-    }
-    log_w += disc_sum > 0.0 ? std::log(disc_sum) : -std::numeric_limits<double>::infinity();
-  }
-  part.log_w += log_w;
-  part.reward_mean = static_cast<float>(reward_sum / phi);
-  part.unknown_reward_mean = static_cast<float>(unknown_sum / phi);
-  part.visits = visits;
+  const SampleTotals t = simulate_samples(s, rays_per_stage, phi, rng, ts, n_cells);
+  part.log_w += t.log_w;
+  part.reward_mean = static_cast<float>(t.reward_sum / phi);
+  part.unknown_reward_mean = static_cast<float>(t.unknown_sum / phi);
+  part.visits = t.visits;
 }
 
 }  // namespace

@@ -139,6 +139,23 @@ struct ThreadScratch {
   std::vector<std::uint32_t> sure_ray;    // per cell: the serial of a ray that surely visits it, known free (repeats)
   std::uint32_t ray_serial = 1;           // the next ray's serial (walks of one thread, never reused until cleared)
   std::vector<Eigen::Vector2f> origins, dirs;
+  // The samples' AVX2 lanes (partial_sim_samples.cpp): per cell (group stamp << 16) | (seen bits
+  // << 8) | sampled-occupied bits, a bit per lane; the random numbers drawn first; R_tj per lane.
+  std::vector<std::uint32_t> lanes_overlay;
+  std::uint32_t lanes_stamp = 0;
+  std::vector<float> lane_delta, lane_u, lane_rk, lane_ru;
+
+  std::uint32_t next_lanes_stamp(std::size_t n_cells) {
+    if (lanes_overlay.size() < n_cells) {
+      lanes_overlay.assign(n_cells, 0);
+      lanes_stamp = 0;
+    }
+    if (++lanes_stamp > 0xFFFFu) {  // wrap: clear (after 65535 groups of samples)
+      std::fill(lanes_overlay.begin(), lanes_overlay.end(), 0u);
+      lanes_stamp = 1;
+    }
+    return lanes_stamp;
+  }
 
   std::uint32_t next_stamp(std::size_t n_cells) {
     if (overlay.size() < n_cells) {  // (stamps are unique per sample, so a window of other cells needs no clearing)

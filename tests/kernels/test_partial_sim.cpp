@@ -20,6 +20,9 @@
 namespace duet {
 namespace detail {
 extern bool partial_sim_drop_repeats;  // partial_sim_rays.cpp: false stores the repeats too
+enum class PartialSimSamples { kAuto, kOneAtATime, kLanes };  // partial_sim_samples.hpp
+extern PartialSimSamples partial_sim_samples;
+bool partial_sim_lanes_available();
 }  // namespace detail
 namespace test_partial_sim {
 
@@ -279,6 +282,62 @@ TEST(PartialSim, DroppingRepeatsChangesNothingButTheCellsStored) {
       expect_same_result(with, without);
       EXPECT_GT(with.cells_visited, with.cells_stored);
     }
+  }
+}
+
+// The samples in AVX2 lanes (up to 8 at once) give the bits of one sample at a time: on the mixed
+// grid of the test above and on a grid smaller than the rays (cells outside it), with
+// more samples than lanes (groups), without l_ISM noise, and with hits so frequent that rays stop
+// on cells other rays sampled occupied; 1 and 2 threads.
+TEST(PartialSim, LanesGiveTheBitsOfOneSampleAtATime) {
+  if (!detail::partial_sim_lanes_available()) GTEST_SKIP() << "no AVX2 on this CPU or build: the lanes are not used";
+  struct Restore {
+    ~Restore() { detail::partial_sim_samples = detail::PartialSimSamples::kAuto; }
+  } restore;
+  TestGrid mixed(400, 400);
+  mixed.room(20, 20, 380, 380);
+  scatter_islands(mixed, 5, 2500, [](int i) { return -0.4f * static_cast<float>(1 + i % 4); });
+  scatter_islands(mixed, 6, 300, [](int i) { return i % 3 == 0 ? 0.2f : kUnknown; });
+  scatter_islands(mixed, 7, 60, [](int) { return kOccL; });
+  mixed.fill(110, 110, 130, 130, -1.2f);
+  TestGrid small(120, 120);  // 6 m x 6 m: the 5 m rays from its middle leave it
+  small.fill(10, 10, 110, 110, -1.2f);
+  for (int i = 0; i < 12; ++i) small.fill(15 + 8 * i, 20 + 7 * (i % 5), 17 + 8 * i, 22 + 7 * (i % 5), i % 2 == 0 ? kUnknown : kOccL);
+  struct Case {
+    const char* name;
+    const TestGrid grid;
+    Pose2 robot;
+  };
+  const Case cases[] = {{"mixed", mixed, Pose2{6.0f, 6.0f, 0.4f}}, {"small grid, rays leave it", small, Pose2{3.0f, 3.0f, 0.5f}}};
+  PartialSimSettings groups;  // phi_i = 5 i + 4: up to 29 samples, four groups of lanes
+  groups.phi_a = 5;
+  groups.phi_b = 4;
+  PartialSimSettings no_noise;
+  no_noise.ism_noise_logodds = 0.0f;
+  PartialSimSettings hits;
+  hits.unknown_hit_probability = 0.3f;
+  const PartialSimSettings settings[] = {PartialSimSettings{}, groups, no_noise, hits};
+  for (const Case& c : cases) {
+    Prepared p(c.grid);
+    for (std::size_t si = 0; si < std::size(settings); ++si)
+      for (int threads : {1, 2}) {
+        PartialSimSettings s = settings[si];
+        s.seed = 7 + si;
+        PartialSimResult one, lanes;
+        tbb::task_arena(threads).execute([&] {
+          PartialSimWorkspace ws;
+          detail::partial_sim_samples = detail::PartialSimSamples::kOneAtATime;
+          one = partial_map_simulation(p.model, p.inflated, c.robot, paper_dual_sensors(30), s, ws);
+          detail::partial_sim_samples = detail::PartialSimSamples::kLanes;
+          lanes = partial_map_simulation(p.model, p.inflated, c.robot, paper_dual_sensors(30), s, ws);  // same (warm) workspace
+          detail::partial_sim_samples = detail::PartialSimSamples::kAuto;
+        });
+        SCOPED_TRACE(std::string(c.name) + ", settings " + std::to_string(si) + ", " + std::to_string(threads) + " threads");
+        ASSERT_GT(one.valid_particles, 10) << "the rollouts must be valid for the test to mean anything";
+        ASSERT_GT(one.reward_bits, 0.0f);
+        expect_same_result(one, lanes);
+        EXPECT_EQ(one.cells_stored, lanes.cells_stored);
+      }
   }
 }
 
