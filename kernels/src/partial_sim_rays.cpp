@@ -16,12 +16,6 @@
 #include <string>
 #include <vector>
 
-namespace duet::detail {
-// Test hook (tests/kernels/test_partial_sim.cpp): false stores the repeats too, the reference
-// the dropping is tested against. Set only while no simulation runs.
-bool partial_sim_drop_repeats = true;
-}  // namespace duet::detail
-
 namespace duet::detail::partial_sim {
 
 // Walks every ray of every stage once (the known part does not depend on j) and stores the cells:
@@ -75,19 +69,11 @@ int ray_reach_cells(float max_range_m, float resolution_m) {
   return static_cast<int>(std::ceil(static_cast<double>(max_range_m) / static_cast<double>(resolution_m))) + 2;
 }
 
-// Repeats: cells every sample passes without effect (lines 13-17 count a cell once per sample): a
-// known-free cell at a later position than a "sure" visit of the same cell. A visit is sure if
-// every cell before it on its ray is known free: a known-free cell is always a miss when counted,
-// and when seen before it was a miss too (the overlay keeps the outcome of a cell's first counted
-// visit, a miss for a known-free cell), so nothing before it can end the ray. After a sure visit of
-// a known-free cell the overlay holds it as seen and missed, so every later visit of it in the same
-// sample is skipped ("seen before, missed") without reward or overlay change: the walk does not
-// store those cells, which changes nothing but the visit count, kept by dropped_before and
-// ray_tail. The walks give each ray a serial number (ThreadScratch::ray_serial) and sure_ray keeps,
-// per cell, the ray of a sure visit; two rays are walked side by side, so a cell marked by the
-// later one is marked again by the earlier one, and only marks of earlier rays drop. Measured on
-// Willow's decisions: about half the visits were seen-before misses, and about a quarter of the
-// cells the walks stored were such repeats.
+// Repeats (stops 62-63): the walks left out, until stop 63, the known-free cells that every sample
+// skips as seen before (a cell after a "sure" visit of it, every cell before that visit on its ray
+// known free), about a quarter of the cells. Once the samples ran in AVX2 lanes
+// (partial_sim_samples.cpp), a cell the samples read cost less than the walk's test for it:
+// Decision/duet/willow 23.6-23.8 ms with the test, 22.7-23.0 ms without (bench/RESULTS.md).
 
 // The cells a ray crosses from its sensor to max_range, by a 2D DDA (Amanatides & Woo) on the
 // 64-bit fixed-point times of detail::CellWalk (observation.hpp), jumping over runs of skip cells
@@ -102,19 +88,14 @@ int ray_reach_cells(float max_range_m, float resolution_m) {
 // Resumable (one cell per advance()), so that two rays can be walked in one loop.
 class RayWalker {
  public:
-  RayWalker(const GridView& grid, const Window& win, std::uint32_t* sure_ray, std::uint32_t walk_first_ray)
+  RayWalker(const GridView& grid, const Window& win)
       : grid_(grid), win_(win), w_(static_cast<unsigned>(win.w)), prior_(win.prior.data()), codes_(win.codes.data()),
-        sb_(win.skip), sure_ray_(sure_ray), walk_first_ray_(walk_first_ray) {}
+        sb_(win.skip) {}
 
-  /// Starts ray number ray_id (ThreadScratch::ray_serial); its cells are appended to out (which
-  /// must have room for max_cells()).
-  void start(const Eigen::Vector2f& o, const Eigen::Vector2f& d, float min_range, float max_range, RayCell* out,
-             std::uint32_t ray_id) {
+  /// Starts a ray; its cells are appended to out (which must have room for max_cells()).
+  void start(const Eigen::Vector2f& o, const Eigen::Vector2f& d, float min_range, float max_range, RayCell* out) {
     out_ = out;
     n_ = 0;
-    ray_id_ = ray_id;
-    sure_ = true;
-    dropped_ = 0;
     done_ = !w_walk_.init(grid_, o, d, 0.0f, max_range);  // on the grid: the same cells as every other walk
     if (done_) return;
     w_walk_.ix -= win_.box.x0;  // to the window's cells (exact)
@@ -138,8 +119,6 @@ class RayWalker {
   }
   [[nodiscard]] bool done() const noexcept { return done_; }
   [[nodiscard]] std::size_t count() const noexcept { return n_; }
-  /// Cells dropped after the last stored one (see "Repeats" above).
-  [[nodiscard]] std::uint32_t tail() const noexcept { return dropped_; }
   /// Upper bound of the cells of one ray of length max_range [m] at resolution res [m].
   static std::size_t max_cells(float max_range, float res) {
     return static_cast<std::size_t>(2.0f * max_range / res) + 8;
@@ -228,11 +207,6 @@ class RayWalker {
     const std::uint8_t* const codes = codes_;
     const Prior* const prior = prior_;
     RayCell* const out = out_;
-    std::uint32_t* const sure_ray = sure_ray_;
-    const std::uint32_t first = walk_first_ray_, ray = ray_id_;
-    bool sure = sure_;
-    const bool drop = partial_sim_drop_repeats;
-    std::uint32_t dropped = dropped_;
     std::size_t n = n_;
     std::int64_t mx = c.mx, my = c.my, t_now = t_now_;
     std::int64_t i = static_cast<std::int64_t>(c.iy) * static_cast<std::int64_t>(w_) + c.ix;
@@ -240,23 +214,8 @@ class RayWalker {
       const std::uint32_t code = codes[i];
       if (code == kSkipCode) break;
       const std::uint32_t kind = kind_of(code);
-      bool store = true;
-      if (kind == kFreeCell && drop) {  // a cell of the grid (kOutsideCode is kUnknownNan)
-        const std::uint32_t s = sure_ray[i];
-        if (s >= first && s < ray) {  // surely seen (and missed) on an earlier ray of this walk
-          store = false;
-          ++dropped;
-        } else if (sure) {
-          sure_ray[i] = ray;  // s is from an older walk, or from the later ray walked beside this one
-        }
-      } else {
-        sure = false;
-      }
-      if (store) {
-        const Prior p = prior[i];
-        out[n++] = {((code == kOutsideCode ? kOutside : static_cast<std::uint32_t>(i)) << 2) | kind, p.l, p.e, dropped};
-        dropped = 0;
-      }
+      const Prior p = prior[i];
+      out[n++] = {((code == kOutsideCode ? kOutside : static_cast<std::uint32_t>(i)) << 2) | kind, p.l, p.e};
       if (kind == kOccupiedCell) {
         done_ = true;
         break;
@@ -270,8 +229,6 @@ class RayWalker {
       step_indexed(i, mx, my, sx, step_y, dx, dy);
     }
     n_ = n;
-    sure_ = sure;
-    dropped_ = dropped;
     keep(mx, my, i, t_now);
   }
 
@@ -311,12 +268,8 @@ class RayWalker {
   const Prior* prior_;
   const std::uint8_t* codes_;
   const SkipBlocks& sb_;
-  std::uint32_t* sure_ray_;
-  std::uint32_t walk_first_ray_;
   RayCell* out_ = nullptr;
   std::size_t n_ = 0;
-  std::uint32_t ray_id_ = 0, dropped_ = 0;
-  bool sure_ = true;
   detail::CellWalk w_walk_;
   std::int64_t t_now_ = 0, t_min_ = 0, mx0_ = 0, my0_ = 0;
   double jump_unit_ = 0.0, inv_dx_ = 0.0, inv_dy_ = 0.0;
@@ -393,18 +346,7 @@ void precompute_rays(const GridView& grid, const Window& win, std::span<const Po
                      std::span<const std::vector<Eigen::Vector2f>> fans, ThreadScratch& ts) {
   ts.cells.clear();
   ts.ray_end.clear();
-  ts.ray_tail.clear();
-  std::size_t rays = 0;
-  for (const SensorSector& sec : sensors) rays += static_cast<std::size_t>(sec.rays);
-  rays *= x.size();
-  if (ts.sure_ray.size() < win.cells() || ts.ray_serial > 0xFFFFFFFFu - rays) {  // a larger window, or the serial would wrap
-    ts.sure_ray.assign(win.cells(), 0u);  // (marks of older walks are below their serials: another window needs no clearing)
-    ts.ray_serial = 1;
-  }
-  const std::uint32_t first = ts.ray_serial;
-  ts.ray_serial += static_cast<std::uint32_t>(rays);
-  std::uint32_t ray_id = first;
-  RayWalker a(grid, win, ts.sure_ray.data(), first), b(grid, win, ts.sure_ray.data(), first);
+  RayWalker a(grid, win), b(grid, win);
   for (const Pose2& pose : x) {
     const float c = std::cos(pose.theta), sn = std::sin(pose.theta);
     for (std::size_t si = 0; si < sensors.size(); ++si) {
@@ -417,8 +359,8 @@ void precompute_rays(const GridView& grid, const Window& win, std::span<const Po
       if (ts.pair_buffer.size() < 2 * cap) ts.pair_buffer.resize(2 * cap);
       for (std::size_t r = 0; r < nr; r += 2) {
         const bool two = r + 1 < nr;
-        a.start(org, ts.dirs[r], sec.min_range_m, sec.max_range_m, ts.pair_buffer.data(), ray_id++);
-        if (two) b.start(org, ts.dirs[r + 1], sec.min_range_m, sec.max_range_m, ts.pair_buffer.data() + cap, ray_id++);
+        a.start(org, ts.dirs[r], sec.min_range_m, sec.max_range_m, ts.pair_buffer.data());
+        if (two) b.start(org, ts.dirs[r + 1], sec.min_range_m, sec.max_range_m, ts.pair_buffer.data() + cap);
         while (!a.done() && two && !b.done()) {
           a.advance();
           b.advance();
@@ -427,11 +369,9 @@ void precompute_rays(const GridView& grid, const Window& win, std::span<const Po
         while (two && !b.done()) b.advance();
         ts.cells.insert(ts.cells.end(), ts.pair_buffer.data(), ts.pair_buffer.data() + a.count());
         ts.ray_end.push_back(static_cast<std::uint32_t>(ts.cells.size()));
-        ts.ray_tail.push_back(a.tail());
         if (two) {
           ts.cells.insert(ts.cells.end(), ts.pair_buffer.data() + cap, ts.pair_buffer.data() + cap + b.count());
           ts.ray_end.push_back(static_cast<std::uint32_t>(ts.cells.size()));
-          ts.ray_tail.push_back(b.tail());
         }
       }
     }

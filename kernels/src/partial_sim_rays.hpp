@@ -38,8 +38,7 @@ static_assert(kind_of(kOutsideCode) == kUnknownNan);
 struct RayCell {
   std::uint32_t packed;  // (index << 2) | kind: the window's index (Window), kOutside outside the grid
   float l;               // prior log-odds (0 for kUnknownNan)
-  float e;               // entropy_table()(l) [bits] (0 for kUnknownNan): once per walk, not per sample
-  std::uint32_t dropped_before;  // repeats of this ray not stored just before this one (partial_sim_rays.cpp)
+  float e;               // entropy_table()(l) [bits] (0 for kUnknownNan): once per window cell, not per sample
 };
 
 // Eq. (5) in bits for finite log-odds, by linear interpolation in a table over [-kTableL, kTableL]
@@ -118,7 +117,7 @@ struct Prior {
 /// The cells one iteration's rays can reach (build_window()): window cell (x, y), index
 /// y * w + x, is grid cell (box.x0 + x, box.y0 + y). Every ray walked lies inside with a margin
 /// (RayWalker checks it), so the walks test no bounds, and the per-thread arrays the walks and
-/// samples index (ThreadScratch::overlay, sure_ray) are the window's size, which is much smaller
+/// samples index (ThreadScratch::overlay, lanes_overlay) are the window's size, which is much smaller
 /// than the grid's and stays in cache.
 struct Window {
   CellBox box;
@@ -135,9 +134,6 @@ struct ThreadScratch {
   std::vector<RayCell> cells;             // all rays of all stages
   std::vector<RayCell> pair_buffer;       // the two rays being walked
   std::vector<std::uint32_t> ray_end;     // end offset of each ray in `cells`
-  std::vector<std::uint32_t> ray_tail;    // cells not stored after each ray's last stored cell (repeats)
-  std::vector<std::uint32_t> sure_ray;    // per cell: the serial of a ray that surely visits it, known free (repeats)
-  std::uint32_t ray_serial = 1;           // the next ray's serial (walks of one thread, never reused until cleared)
   std::vector<Eigen::Vector2f> origins, dirs;
   // The samples' AVX2 lanes (partial_sim_samples.cpp): per cell (group stamp << 16) | (seen bits
   // << 8) | sampled-occupied bits, a bit per lane; the random numbers drawn first; R_tj per lane.
@@ -178,8 +174,8 @@ void add_ray_box(const GridView& grid, std::span<const Pose2> x, std::span<const
 /// Error(kOutOfRange) for a box of 2^30 cells or more.
 void build_window(const ObservationModel& model, float clamp_min, const CellBox& box, Window& win);
 
-/// The cells of every ray of every stage of trajectory x into ts.cells / ts.ray_end / ts.ray_tail,
-/// without the repeats every sample skips (see partial_sim_rays.cpp). The rays must lie in win
+/// The cells of every ray of every stage of trajectory x into ts.cells / ts.ray_end (see
+/// partial_sim_rays.cpp). The rays must lie in win
 /// (add_ray_box() of the same poses): else Error(kInternal).
 void precompute_rays(const GridView& grid, const Window& win, std::span<const Pose2> x, std::span<const SensorSector> sensors,
                      std::span<const std::vector<Eigen::Vector2f>> fans, ThreadScratch& ts);

@@ -62,7 +62,6 @@ SampleTotals one_at_a_time(const PartialSimSettings& s, const SampleConstants& s
   SampleTotals out;
   const RayCell* const cells = ts.cells.data();
   const std::uint32_t* const ray_end = ts.ray_end.data();
-  const std::uint32_t* const ray_tail = ts.ray_tail.data();
   const float l_min = sc.l_min, l_max = sc.l_max;
   std::int64_t visits = 0;
   for (int j = 0; j < phi; ++j) {
@@ -84,21 +83,15 @@ SampleTotals one_at_a_time(const PartialSimSettings& s, const SampleConstants& s
         // the ray meets an unknown cell (most rays end on a known wall): unknown_left < 0 = not yet.
         const float u = 1.0f - rng.uniform01();  // (0, 1]
         std::int64_t unknown_left = -1;
-        // The visits count the repeats the walk did not store (partial_sim_rays.cpp): those
-        // before each cell reached, and the ray's tail when it is walked to its end.
-        bool cut = false;
         for (std::uint32_t c = begin; c < end; ++c) {
           const RayCell cell = cells[c];
           const std::uint32_t kind = cell.packed & 3u;
           const std::uint32_t idx = cell.packed >> 2;
-          visits += 1 + static_cast<std::int64_t>(cell.dropped_before);
+          ++visits;
           if (idx != kOutside) {
             const std::uint32_t o = ov[idx];
             if ((o >> 1) == stamp) {  // observed earlier in this sample: not counted again
-              if (o & 1u) {           // sampled occupied: stops this ray too
-                cut = true;
-                break;
-              }
+              if (o & 1u) break;      // sampled occupied: stops this ray too
               continue;
             }
           }
@@ -123,12 +116,8 @@ SampleTotals one_at_a_time(const PartialSimSettings& s, const SampleConstants& s
             if (kind == kUnknownFinite) r_unknown += gain;
           }
           if (idx != kOutside) ov[idx] = (stamp << 1) | (hit ? 1u : 0u);
-          if (hit) {
-            cut = true;
-            break;
-          }
+          if (hit) break;
         }
-        if (!cut) visits += ray_tail[ray];
       }
       disc_sum += std::pow(static_cast<double>(s.gamma), static_cast<double>(k - sc.H)) * r_k;  // line 19 term
       out.reward_sum += r_k;
@@ -176,7 +165,6 @@ __attribute__((target("avx2"))) SampleTotals lanes(const PartialSimSettings& s, 
 
   const RayCell* const cells = ts.cells.data();
   const std::uint32_t* const ray_end = ts.ray_end.data();
-  const std::uint32_t* const ray_tail = ts.ray_tail.data();
   const __m256i lane_bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
   const __m256 v_min = _mm256_set1_ps(sc.l_min), v_max = _mm256_set1_ps(sc.l_max);
   const __m256 v_table_l = _mm256_set1_ps(kTableL), v_table_scale = _mm256_set1_ps(kTableScale);
@@ -210,7 +198,7 @@ __attribute__((target("avx2"))) SampleTotals lanes(const PartialSimSettings& s, 
           const RayCell cell = cells[c];
           const std::uint32_t kind = cell.packed & 3u;
           const std::uint32_t idx = cell.packed >> 2;
-          visits += static_cast<std::int64_t>(std::popcount(active)) * (1 + static_cast<std::int64_t>(cell.dropped_before));
+          visits += std::popcount(active);
           const std::uint32_t o = idx != kOutside ? ov[idx] : 0u;
           const bool stamped = (o & 0xFFFF0000u) == stamp;
           const std::uint32_t seen = stamped ? (o >> 8) & 0xFFu : 0u, seen_hit = stamped ? o & 0xFFu : 0u;
@@ -259,7 +247,6 @@ __attribute__((target("avx2"))) SampleTotals lanes(const PartialSimSettings& s, 
           active &= ~hit;
           if (active == 0) break;
         }
-        visits += static_cast<std::int64_t>(std::popcount(active)) * static_cast<std::int64_t>(ray_tail[ray]);
       }
       alignas(32) float rk[8], ru[8];
       _mm256_store_ps(rk, r_k);

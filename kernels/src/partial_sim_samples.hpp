@@ -26,10 +26,10 @@ struct SampleTotals {
   double log_w = 0.0;        // log prod_j sum_t gamma^(t-H) R_tj (line 19)
   double reward_sum = 0.0;   // sum over j and t of R_tj [bits]
   double unknown_sum = 0.0;  // its part from cells whose state is unknown [bits]
-  std::int64_t visits = 0;   // cells the samples processed (with the repeats the walks did not store)
+  std::int64_t visits = 0;   // cells the samples processed
 };
 
-/// The phi samples of one particle's rays in ts (ts.cells, ray_end, ray_tail; rays_per_stage rays
+/// The phi samples of one particle's rays in ts (ts.cells, ray_end; rays_per_stage rays
 /// per stage), drawing from rng in the order: per sample j, per stage k, the l_ISM noise (if any),
 /// then one uniform per ray. n_cells: the window's cells (the overlay's indices).
 SampleTotals simulate_samples(const PartialSimSettings& s, std::size_t rays_per_stage, int phi, Rng& rng, ThreadScratch& ts,

@@ -19,7 +19,6 @@
 
 namespace duet {
 namespace detail {
-extern bool partial_sim_drop_repeats;  // partial_sim_rays.cpp: false stores the repeats too
 enum class PartialSimSamples { kAuto, kOneAtATime, kLanes };  // partial_sim_samples.hpp
 extern PartialSimSamples partial_sim_samples;
 bool partial_sim_lanes_available();
@@ -243,45 +242,6 @@ TEST(PartialSim, JumpsOverClampedFreeSpaceMissNoCell) {
     EXPECT_EQ(r.cells_visited, crossings) << "theta " << theta;
     const double per_cell = static_cast<double>(entropy_bits(-0.4f)) - static_cast<double>(entropy_bits(-0.8f));
     EXPECT_NEAR(r.reward_bits, per_cell * static_cast<double>(cells.size()), 1e-3 * per_cell) << "theta " << theta;
-  }
-}
-
-// The walks leave out the repeats every sample skips (a known-free cell after a sure visit of
-// it): the whole result - goal, weights, rewards, the visits - is the same as with every cell
-// stored, on grids that mix free cells below the clamp (stored), clamped free space (skipped),
-// never-observed and finite unknown cells and walls, with 1 and 2 threads; and cells are dropped.
-TEST(PartialSim, DroppingRepeatsChangesNothingButTheCellsStored) {
-  struct Restore {
-    ~Restore() { detail::partial_sim_drop_repeats = true; }
-  } restore;
-  for (unsigned seed : {3u, 17u, 29u}) {
-    TestGrid g(400, 400);  // scatter_islands places islands over 400 x 400
-    g.room(20, 20, 380, 380);                                                      // clamped free, walled
-    scatter_islands(g, seed, 2500, [](int i) { return -0.4f * static_cast<float>(1 + i % 4); });  // free, not clamped
-    scatter_islands(g, seed + 1, 300, [](int i) { return i % 3 == 0 ? 0.2f : kUnknown; });        // unknown
-    scatter_islands(g, seed + 2, 60, [](int) { return kOccL; });                                  // obstacles
-    g.fill(110, 110, 130, 130, -1.2f);  // the robot's own patch: free, not clamped
-    Prepared p(g);
-    const Pose2 robot{6.0f, 6.0f, 0.1f * static_cast<float>(seed)};
-    const auto sensors = paper_dual_sensors(30);
-    PartialSimSettings s;
-    s.seed = seed;
-    for (int threads : {1, 2}) {
-      PartialSimResult with, without;
-      tbb::task_arena(threads).execute([&] {
-        PartialSimWorkspace ws;
-        detail::partial_sim_drop_repeats = true;
-        with = partial_map_simulation(p.model, p.inflated, robot, sensors, s, ws);
-        detail::partial_sim_drop_repeats = false;
-        without = partial_map_simulation(p.model, p.inflated, robot, sensors, s, ws);  // same (warm) workspace
-        detail::partial_sim_drop_repeats = true;
-      });
-      SCOPED_TRACE("seed " + std::to_string(seed) + ", " + std::to_string(threads) + " threads");
-      ASSERT_GT(without.valid_particles, 10) << "the rollouts must be valid for the test to mean anything";
-      EXPECT_LT(with.cells_stored, without.cells_stored * 95 / 100) << "repeats must be dropped for the test to mean anything";
-      expect_same_result(with, without);
-      EXPECT_GT(with.cells_visited, with.cells_stored);
-    }
   }
 }
 

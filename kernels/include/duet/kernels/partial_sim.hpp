@@ -122,8 +122,7 @@ struct PartialSimResult {
   /// min_logodds are skipped: their reward is exactly 0 and they never stop a ray).
   std::int64_t cells_visited = 0;
   /// Cells the walks stored for the samples over all iterations (each read by every sample of
-  /// its iteration). Fewer than the cells walked: repeats that every sample skips are not stored
-  /// (a known-free cell after a sure visit of it; partial_sim_rays.cpp), but cells_visited counts them.
+  /// its iteration that reaches it).
   std::int64_t cells_stored = 0;
 };
 
