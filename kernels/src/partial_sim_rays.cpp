@@ -1,6 +1,6 @@
 /// @file partial_sim_rays.cpp
 /// Partial map simulation's ray precomputation: the window of cells the rays can reach (codes,
-/// priors, empty-space skipping blocks) and RayWalker (which leaves out the repeats every sample skips).
+/// stored cells, empty-space skipping blocks) and RayWalker.
 #include "partial_sim_rays.hpp"
 
 #include <tbb/blocked_range.h>
@@ -89,7 +89,7 @@ int ray_reach_cells(float max_range_m, float resolution_m) {
 class RayWalker {
  public:
   RayWalker(const GridView& grid, const Window& win)
-      : grid_(grid), win_(win), w_(static_cast<unsigned>(win.w)), prior_(win.prior.data()), codes_(win.codes.data()),
+      : grid_(grid), win_(win), w_(static_cast<unsigned>(win.w)), cell_(win.cell.data()), codes_(win.codes.data()),
         sb_(win.skip) {}
 
   /// Starts a ray; its cells are appended to out (which must have room for max_cells()).
@@ -205,7 +205,7 @@ class RayWalker {
     const std::int64_t sx = c.sx, step_y = c.sy * static_cast<std::int64_t>(w_);
     const std::int64_t dx = c.dx, dy = c.dy, end = c.end;
     const std::uint8_t* const codes = codes_;
-    const Prior* const prior = prior_;
+    const RayCell* const cell = cell_;
     RayCell* const out = out_;
     std::size_t n = n_;
     std::int64_t mx = c.mx, my = c.my, t_now = t_now_;
@@ -213,10 +213,8 @@ class RayWalker {
     for (;;) {
       const std::uint32_t code = codes[i];
       if (code == kSkipCode) break;
-      const std::uint32_t kind = kind_of(code);
-      const Prior p = prior[i];
-      out[n++] = {((code == kOutsideCode ? kOutside : static_cast<std::uint32_t>(i)) << 2) | kind, p.l, p.e};
-      if (kind == kOccupiedCell) {
+      out[n++] = cell[i];
+      if (code == kOccupiedCell + 1) {
         done_ = true;
         break;
       }
@@ -265,7 +263,7 @@ class RayWalker {
   const GridView& grid_;
   const Window& win_;
   unsigned w_;
-  const Prior* prior_;
+  const RayCell* cell_;
   const std::uint8_t* codes_;
   const SkipBlocks& sb_;
   RayCell* out_ = nullptr;
@@ -312,7 +310,7 @@ void build_window(const ObservationModel& model, float clamp_min, const CellBox&
   win.w = box.empty() ? 0 : box.x1 - box.x0 + 1;
   win.h = box.empty() ? 0 : box.y1 - box.y0 + 1;
   win.codes.resize(win.cells());
-  win.prior.resize(win.cells());
+  win.cell.resize(win.cells());
   tbb::parallel_for(tbb::blocked_range<int>(0, win.h, 16), [&](const tbb::blocked_range<int>& rg) {
     for (int y = rg.begin(); y != rg.end(); ++y) {
       const int gy = box.y0 + y;
@@ -320,10 +318,10 @@ void build_window(const ObservationModel& model, float clamp_min, const CellBox&
       for (int x = 0; x < win.w; ++x) {
         const int gx = box.x0 + x;
         std::uint8_t& code = win.codes[row + static_cast<std::size_t>(x)];
-        Prior& prior = win.prior[row + static_cast<std::size_t>(x)];
+        RayCell& cell = win.cell[row + static_cast<std::size_t>(x)];
         if (gx < 0 || gy < 0 || gx >= grid.width || gy >= grid.height) {
           code = static_cast<std::uint8_t>(kOutsideCode);
-          prior = Prior{};
+          cell = RayCell{(kOutside << 2) | kUnknownNan, 0.0f, 0.0f};
           continue;
         }
         const std::size_t i = static_cast<std::size_t>(gy) * static_cast<std::size_t>(grid.width) + static_cast<std::size_t>(gx);
@@ -335,7 +333,8 @@ void build_window(const ObservationModel& model, float clamp_min, const CellBox&
           default: kind = std::isnan(l) ? kUnknownNan : kUnknownFinite; break;
         }
         code = static_cast<std::uint8_t>(kind == kFreeCell && l == clamp_min ? kSkipCode : kind + 1);
-        prior = kind == kUnknownNan ? Prior{} : Prior{l, et(l)};
+        const auto packed = (static_cast<std::uint32_t>(row + static_cast<std::size_t>(x)) << 2) | kind;
+        cell = kind == kUnknownNan ? RayCell{packed, 0.0f, 0.0f} : RayCell{packed, l, et(l)};
       }
     }
   });

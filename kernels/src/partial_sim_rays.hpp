@@ -1,6 +1,6 @@
 #pragma once
 // Internal: the precomputed rays of partial map simulation (Procedure 1, partial_sim.cpp): the window
-// of cells an iteration's rays can reach (per-cell codes, priors and empty-space skipping blocks)
+// of cells an iteration's rays can reach (per-cell codes, stored cells and empty-space skipping blocks)
 // and the walks that store each ray's cells (partial_sim_rays.cpp), with the per-thread scratch
 // they fill. What is read per cell (RayCell, the kinds) is inline here.
 #include <duet/kernels/grid_view.hpp>
@@ -37,6 +37,7 @@ static_assert(kind_of(kOutsideCode) == kUnknownNan);
 
 struct RayCell {
   std::uint32_t packed;  // (index << 2) | kind: the window's index (Window), kOutside outside the grid
+                         // (l = e = 0 for kUnknownNan, outside the grid too)
   float l;               // prior log-odds (0 for kUnknownNan)
   float e;               // entropy_table()(l) [bits] (0 for kUnknownNan): once per window cell, not per sample
 };
@@ -108,12 +109,6 @@ struct CellBox {
   }
 };
 
-/// A cell's prior as the samples read it: l (log-odds; 0 for a never-observed cell or one outside
-/// the grid) and e = entropy_table()(l) [bits] (0 for those), computed once per window cell.
-struct Prior {
-  float l = 0.0f, e = 0.0f;
-};
-
 /// The cells one iteration's rays can reach (build_window()): window cell (x, y), index
 /// y * w + x, is grid cell (box.x0 + x, box.y0 + y). Every ray walked lies inside with a margin
 /// (RayWalker checks it), so the walks test no bounds, and the per-thread arrays the walks and
@@ -123,7 +118,7 @@ struct Window {
   CellBox box;
   int w = 0, h = 0;
   std::vector<std::uint8_t> codes;  // per window cell (kSkipCode, kind + 1, kOutsideCode)
-  std::vector<Prior> prior;         // per window cell
+  std::vector<RayCell> cell;        // per window cell: what a walk stores for it (index, kind, l, E(l)), once per call
   SkipBlocks skip;                  // over codes (build_skip_blocks)
   [[nodiscard]] std::size_t cells() const noexcept { return static_cast<std::size_t>(w) * static_cast<std::size_t>(h); }
 };
@@ -170,7 +165,7 @@ struct ThreadScratch {
 /// RayWalker checks: every cell within ceil(max_range / resolution) + 2 cells of a fan's origin).
 void add_ray_box(const GridView& grid, std::span<const Pose2> x, std::span<const SensorSector> sensors, CellBox& box);
 
-/// Fills win for box (codes, priors, skipping blocks; see partial_sim_rays.cpp). Throws
+/// Fills win for box (codes, cells, skipping blocks; see partial_sim_rays.cpp). Throws
 /// Error(kOutOfRange) for a box of 2^30 cells or more.
 void build_window(const ObservationModel& model, float clamp_min, const CellBox& box, Window& win);
 
