@@ -334,7 +334,8 @@ void build_window(const ObservationModel& model, float clamp_min, const CellBox&
         }
         code = static_cast<std::uint8_t>(kind == kFreeCell && l == clamp_min ? kSkipCode : kind + 1);
         const auto packed = (static_cast<std::uint32_t>(row + static_cast<std::size_t>(x)) << 2) | kind;
-        cell = kind == kUnknownNan ? RayCell{packed, 0.0f, 0.0f} : RayCell{packed, l, et(l)};
+        // (a skip cell is never stored: its E(l) is not needed, and most cells of a mapped area are such)
+        cell = kind == kUnknownNan || code == kSkipCode ? RayCell{packed, 0.0f, 0.0f} : RayCell{packed, l, et(l)};
       }
     }
   });
