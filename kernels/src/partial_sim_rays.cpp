@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <span>
 #include <string>
 #include <vector>
@@ -356,21 +357,22 @@ void precompute_rays(const GridView& grid, const Window& win, std::span<const Po
       const Eigen::Vector2f org = detail::fan_origin(pose, sec, c, sn);
       for (std::size_t r = 0; r < nr; ++r) ts.dirs[r] = detail::turn(c, sn, fans[si][r]);
       const std::size_t cap = RayWalker::max_cells(sec.max_range_m, grid.resolution_m);
-      if (ts.pair_buffer.size() < 2 * cap) ts.pair_buffer.resize(2 * cap);
       for (std::size_t r = 0; r < nr; r += 2) {
         const bool two = r + 1 < nr;
-        a.start(org, ts.dirs[r], sec.min_range_m, sec.max_range_m, ts.pair_buffer.data());
-        if (two) b.start(org, ts.dirs[r + 1], sec.min_range_m, sec.max_range_m, ts.pair_buffer.data() + cap);
+        RayCell* const out = ts.cells.room(2 * cap);  // ray a's cells in place, b's after a's room
+        a.start(org, ts.dirs[r], sec.min_range_m, sec.max_range_m, out);
+        if (two) b.start(org, ts.dirs[r + 1], sec.min_range_m, sec.max_range_m, out + cap);
         while (!a.done() && two && !b.done()) {
           a.advance();
           b.advance();
         }
         while (!a.done()) a.advance();
         while (two && !b.done()) b.advance();
-        ts.cells.insert(ts.cells.end(), ts.pair_buffer.data(), ts.pair_buffer.data() + a.count());
+        ts.cells.keep(a.count());
         ts.ray_end.push_back(static_cast<std::uint32_t>(ts.cells.size()));
         if (two) {
-          ts.cells.insert(ts.cells.end(), ts.pair_buffer.data() + cap, ts.pair_buffer.data() + cap + b.count());
+          std::memmove(out + a.count(), out + cap, b.count() * sizeof(RayCell));  // down to follow a's
+          ts.cells.keep(b.count());
           ts.ray_end.push_back(static_cast<std::uint32_t>(ts.cells.size()));
         }
       }

@@ -14,7 +14,9 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 namespace duet::detail::partial_sim {
@@ -41,6 +43,7 @@ struct RayCell {
   float l;               // prior log-odds (0 for kUnknownNan)
   float e;               // entropy_table()(l) [bits] (0 for kUnknownNan): once per window cell, not per sample
 };
+static_assert(std::is_trivially_copyable_v<RayCell>);  // (CellBuffer and the walks move cells by memmove)
 
 // Eq. (5) in bits for finite log-odds, by linear interpolation in a table over [-kTableL, kTableL]
 // (step 1/256; the interpolation error is below 2e-7 bits). Posteriors are clamped to the
@@ -123,11 +126,36 @@ struct Window {
   [[nodiscard]] std::size_t cells() const noexcept { return static_cast<std::size_t>(w) * static_cast<std::size_t>(h); }
 };
 
+/// The cells of a particle's rays: a growable array that is not zeroed when it grows (the walks
+/// write each cell before it is read), so that two rays are walked straight into it.
+class CellBuffer {
+ public:
+  [[nodiscard]] const RayCell* data() const noexcept { return data_.get(); }
+  [[nodiscard]] std::size_t size() const noexcept { return size_; }
+  void clear() noexcept { size_ = 0; }
+  /// Room for n more cells after size(); valid until the next call.
+  RayCell* room(std::size_t n) {
+    if (size_ + n > capacity_) {
+      const std::size_t c = std::max(2 * capacity_, size_ + n);
+      auto grown = std::make_unique_for_overwrite<RayCell[]>(c);
+      std::copy(data_.get(), data_.get() + size_, grown.get());
+      data_ = std::move(grown);
+      capacity_ = c;
+    }
+    return data_.get() + size_;
+  }
+  /// Keeps the first n cells of the room.
+  void keep(std::size_t n) noexcept { size_ += n; }
+
+ private:
+  std::unique_ptr<RayCell[]> data_;
+  std::size_t size_ = 0, capacity_ = 0;
+};
+
 struct ThreadScratch {
   std::vector<std::uint32_t> overlay;  // per cell: (stamp << 1) | sampled occupied
   std::uint32_t stamp = 0;
-  std::vector<RayCell> cells;             // all rays of all stages
-  std::vector<RayCell> pair_buffer;       // the two rays being walked
+  CellBuffer cells;                       // all rays of all stages
   std::vector<std::uint32_t> ray_end;     // end offset of each ray in `cells`
   std::vector<Eigen::Vector2f> origins, dirs;
   // The samples' AVX2 lanes (partial_sim_samples.cpp): per cell (group stamp << 16) | (seen bits
