@@ -259,10 +259,7 @@ PartialSimResult partial_map_simulation(const ObservationModel& model, const Inf
     // again only when a later iteration's rays leave it (a margin makes that rare).
     CellBox reach;
     for (const Particle& p : ws.particles) reach.add(p.rays);
-    if (i == 1 || !ws.window.box.contains(reach)) {
-      if (!reach.empty()) reach = CellBox{reach.x0 - kWindowMargin, reach.y0 - kWindowMargin, reach.x1 + kWindowMargin, reach.y1 + kWindowMargin};
-      build_window(model, s.min_logodds, reach, ws.window);
-    }
+    if (i == 1 || !ws.window.box.contains(reach)) build_window(model, s.min_logodds, reach.grown(kWindowMargin), ws.window);
     tbb::parallel_for(tbb::blocked_range<int>(0, N, 1), [&](const tbb::blocked_range<int>& range) {
       ThreadScratch& ts = ws.scratch.local();
       for (int n = range.begin(); n != range.end(); ++n) {

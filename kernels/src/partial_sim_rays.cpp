@@ -21,7 +21,7 @@ namespace duet::detail::partial_sim {
 
 // Walks every ray of every stage once (the known part does not depend on j) and stores the cells:
 // known-occupied cells end a ray; unknown and free cells are stored with their kind.
-// Empty-space skipping for the walks: the grid is cut into kBlock x kBlock blocks; dist[b] is
+// Empty-space skipping for the walks: the window is cut into kBlock x kBlock blocks; dist[b] is
 // the chessboard distance, in blocks, from block b to the nearest block that holds a cell that is
 // not kSkipCode (or lies on the window's border). From a cell of a block with dist D >= 2 every cell
 // within kBlock * (D - 1) cells (chessboard) is a skip cell, so a ray can jump that far at once.
@@ -45,7 +45,7 @@ void build_skip_blocks(int w, int h, std::span<const std::uint8_t> codes, SkipBl
         sb.dist[static_cast<std::size_t>(by) * static_cast<std::size_t>(sb.bw) + static_cast<std::size_t>(bx)] = all ? 255 : 0;
       }
   });
-  // Chessboard distance transform (two raster passes; outside the grid counts as distance 0).
+  // Chessboard distance transform (two raster passes; outside the window counts as distance 0).
   auto at = [&](int x, int y) -> int {
     if (x < 0 || y < 0 || x >= sb.bw || y >= sb.bh) return 0;
     return sb.dist[static_cast<std::size_t>(y) * static_cast<std::size_t>(sb.bw) + static_cast<std::size_t>(x)];
@@ -70,12 +70,6 @@ int ray_reach_cells(float max_range_m, float resolution_m) {
   return static_cast<int>(std::ceil(static_cast<double>(max_range_m) / static_cast<double>(resolution_m))) + 2;
 }
 
-// Repeats (stops 62-63): the walks left out, until stop 63, the known-free cells that every sample
-// skips as seen before (a cell after a "sure" visit of it, every cell before that visit on its ray
-// known free), about a quarter of the cells. Once the samples ran in AVX2 lanes
-// (partial_sim_samples.cpp), a cell the samples read cost less than the walk's test for it:
-// Decision/duet/willow 23.6-23.8 ms with the test, 22.7-23.0 ms without (bench/RESULTS.md).
-
 // The cells a ray crosses from its sensor to max_range, by a 2D DDA (Amanatides & Woo) on the
 // 64-bit fixed-point times of detail::CellWalk (observation.hpp), jumping over runs of skip cells
 // (SkipBlocks). The step is branch-free (the x-or-y choice is a conditional move on integers: a
@@ -93,15 +87,15 @@ class RayWalker {
       : grid_(grid), win_(win), w_(static_cast<unsigned>(win.w)), cell_(win.cell.data()), codes_(win.codes.data()),
         sb_(win.skip) {}
 
-  /// Starts a ray; its cells are appended to out (which must have room for max_cells()).
-  void start(const Eigen::Vector2f& o, const Eigen::Vector2f& d, float min_range, float max_range, RayCell* out) {
+  /// Starts a ray; its cells are appended to out (which must have room for max_cells()). reach:
+  /// ray_reach_cells(max_range, resolution), the same for a fan's rays.
+  void start(const Eigen::Vector2f& o, const Eigen::Vector2f& d, float min_range, float max_range, int reach, RayCell* out) {
     out_ = out;
     n_ = 0;
     done_ = !w_walk_.init(grid_, o, d, 0.0f, max_range);  // on the grid: the same cells as every other walk
     if (done_) return;
     w_walk_.ix -= win_.box.x0;  // to the window's cells (exact)
     w_walk_.iy -= win_.box.y0;
-    const int reach = ray_reach_cells(max_range, grid_.resolution_m);
     if (w_walk_.ix < reach || w_walk_.iy < reach || w_walk_.ix + reach >= win_.w || w_walk_.iy + reach >= win_.h)
       fail(ErrorCode::kInternal, "partial_map_simulation: a ray from window cell (" + std::to_string(w_walk_.ix) + ", " +
                                      std::to_string(w_walk_.iy) + ") can leave the window of " + std::to_string(win_.w) + " x " +
@@ -357,11 +351,12 @@ void precompute_rays(const GridView& grid, const Window& win, std::span<const Po
       const Eigen::Vector2f org = detail::fan_origin(pose, sec, c, sn);
       for (std::size_t r = 0; r < nr; ++r) ts.dirs[r] = detail::turn(c, sn, fans[si][r]);
       const std::size_t cap = RayWalker::max_cells(sec.max_range_m, grid.resolution_m);
+      const int reach = ray_reach_cells(sec.max_range_m, grid.resolution_m);
       for (std::size_t r = 0; r < nr; r += 2) {
         const bool two = r + 1 < nr;
         RayCell* const out = ts.cells.room(2 * cap);  // ray a's cells in place, b's after a's room
-        a.start(org, ts.dirs[r], sec.min_range_m, sec.max_range_m, out);
-        if (two) b.start(org, ts.dirs[r + 1], sec.min_range_m, sec.max_range_m, out + cap);
+        a.start(org, ts.dirs[r], sec.min_range_m, sec.max_range_m, reach, out);
+        if (two) b.start(org, ts.dirs[r + 1], sec.min_range_m, sec.max_range_m, reach, out + cap);
         while (!a.done() && two && !b.done()) {
           a.advance();
           b.advance();

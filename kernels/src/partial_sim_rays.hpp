@@ -110,6 +110,8 @@ struct CellBox {
   [[nodiscard]] std::int64_t cells() const noexcept {
     return empty() ? 0 : (std::int64_t{x1} - x0 + 1) * (std::int64_t{y1} - y0 + 1);
   }
+  /// The box with m more cells on every side (empty stays empty).
+  [[nodiscard]] CellBox grown(int m) const noexcept { return empty() ? *this : CellBox{x0 - m, y0 - m, x1 + m, y1 + m}; }
 };
 
 /// The cells one iteration's rays can reach (build_window()): window cell (x, y), index
@@ -152,41 +154,35 @@ class CellBuffer {
   std::size_t size_ = 0, capacity_ = 0;
 };
 
-struct ThreadScratch {
-  std::vector<std::uint32_t> overlay;  // per cell: (stamp << 1) | sampled occupied
+/// A per-cell array of stamped words (the samples' "seen in this sample" marks): next() gives a
+/// stamp that no word holds yet, so nothing is cleared between samples (only when the stamps wrap,
+/// or the array grows). A window of other cells needs no clearing either: the stamps are unique.
+struct StampedOverlay {
+  std::vector<std::uint32_t> word;
   std::uint32_t stamp = 0;
-  CellBuffer cells;                       // all rays of all stages
-  std::vector<std::uint32_t> ray_end;     // end offset of each ray in `cells`
-  std::vector<Eigen::Vector2f> origins, dirs;
-  // The samples' AVX2 lanes (partial_sim_samples.cpp): per cell (group stamp << 16) | (seen bits
-  // << 8) | sampled-occupied bits, a bit per lane; the random numbers drawn first; R_tj per lane.
-  std::vector<std::uint32_t> lanes_overlay;
-  std::uint32_t lanes_stamp = 0;
-  std::vector<float> lane_delta, lane_u, lane_rk, lane_ru;
-
-  std::uint32_t next_lanes_stamp(std::size_t n_cells) {
-    if (lanes_overlay.size() < n_cells) {
-      lanes_overlay.assign(n_cells, 0);
-      lanes_stamp = 0;
-    }
-    if (++lanes_stamp > 0xFFFFu) {  // wrap: clear (after 65535 groups of samples)
-      std::fill(lanes_overlay.begin(), lanes_overlay.end(), 0u);
-      lanes_stamp = 1;
-    }
-    return lanes_stamp;
-  }
-
-  std::uint32_t next_stamp(std::size_t n_cells) {
-    if (overlay.size() < n_cells) {  // (stamps are unique per sample, so a window of other cells needs no clearing)
-      overlay.assign(n_cells, 0);
+  /// A new stamp in [1, last]; word has at least n_cells entries.
+  std::uint32_t next(std::size_t n_cells, std::uint32_t last) {
+    if (word.size() < n_cells) {
+      word.assign(n_cells, 0);
       stamp = 0;
     }
-    if (++stamp >= (1u << 31)) {  // wrap: clear (after 2^31 samples)
-      std::fill(overlay.begin(), overlay.end(), 0u);
+    if (++stamp > last) {  // wrap: clear
+      std::fill(word.begin(), word.end(), 0u);
       stamp = 1;
     }
     return stamp;
   }
+};
+
+struct ThreadScratch {
+  StampedOverlay overlay;                 // one sample at a time: per cell (stamp << 1) | sampled occupied
+  CellBuffer cells;                       // all rays of all stages
+  std::vector<std::uint32_t> ray_end;     // end offset of each ray in `cells`
+  std::vector<Eigen::Vector2f> dirs;
+  // The samples' AVX2 lanes (partial_sim_samples.cpp): per cell (group stamp << 16) | (seen bits
+  // << 8) | sampled-occupied bits, a bit per lane; the random numbers drawn first; R_tj per lane.
+  StampedOverlay lanes_overlay;
+  std::vector<float> lane_delta, lane_u, lane_rk, lane_ru;
 };
 
 /// Adds to box the cells within reach of the fans of `sensors` at the poses x (the window margin

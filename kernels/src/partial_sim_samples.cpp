@@ -55,6 +55,21 @@ inline std::int64_t unknown_cells_before_hit(float u, float inv_log_q) {
   return g < 1e9f ? static_cast<std::int64_t>(g) : std::numeric_limits<std::int64_t>::max();
 }
 
+// Line 14's noise of sample j at stage k: drawn once per (j, k), before the stage's rays.
+inline float ism_noise(const PartialSimSettings& s, Rng& rng) {
+  return s.ism_noise_logodds > 0.0f ? rng.uniform(-s.ism_noise_logodds, s.ism_noise_logodds) : 0.0f;
+}
+
+// What a (sample, stage) adds to the priors: l_ISM of a hit and of a miss (line 14), and lines
+// 15-16 for a never-observed cell (prior 0, E = 1 bit), the same for all of them.
+struct IsmTerms {
+  float l_hit, l_miss, r_hit_nan, r_miss_nan;
+  IsmTerms(const PartialSimSettings& s, const SampleConstants& sc, float delta)
+      : l_hit(s.hit_logodds + delta), l_miss(s.miss_logodds + delta),
+        r_hit_nan(1.0f - entropy_table()(std::clamp(l_hit, sc.l_min, sc.l_max))),
+        r_miss_nan(1.0f - entropy_table()(std::clamp(l_miss, sc.l_min, sc.l_max))) {}
+};
+
 // One sample at a time: the reference the lanes are tested against.
 SampleTotals one_at_a_time(const PartialSimSettings& s, const SampleConstants& sc, int phi, Rng& rng, ThreadScratch& ts,
                            std::size_t n_cells) {
@@ -65,15 +80,12 @@ SampleTotals one_at_a_time(const PartialSimSettings& s, const SampleConstants& s
   const float l_min = sc.l_min, l_max = sc.l_max;
   std::int64_t visits = 0;
   for (int j = 0; j < phi; ++j) {
-    const std::uint32_t stamp = ts.next_stamp(n_cells);
-    std::uint32_t* const ov = ts.overlay.data();
+    const std::uint32_t stamp = ts.overlay.next(n_cells, (1u << 31) - 1);  // (stamp << 1) must fit
+    std::uint32_t* const ov = ts.overlay.word.data();
     double disc_sum = 0.0;
     for (int k = 0; k < sc.H; ++k) {
-      const float delta = s.ism_noise_logodds > 0.0f ? rng.uniform(-s.ism_noise_logodds, s.ism_noise_logodds) : 0.0f;
-      const float l_hit = s.hit_logodds + delta, l_miss = s.miss_logodds + delta;  // line 14
-      // Lines 15-16 for a never-observed cell (prior 0, E = 1 bit), the same for all of them.
-      const float r_hit_nan = 1.0f - et(std::clamp(l_hit, l_min, l_max));
-      const float r_miss_nan = 1.0f - et(std::clamp(l_miss, l_min, l_max));
+      const IsmTerms ism(s, sc, ism_noise(s, rng));
+      const float l_hit = ism.l_hit, l_miss = ism.l_miss, r_hit_nan = ism.r_hit_nan, r_miss_nan = ism.r_miss_nan;
       float r_k = 0.0f, r_unknown = 0.0f;
       for (std::size_t r = 0; r < sc.rays; ++r) {
         const std::size_t ray = static_cast<std::size_t>(k) * sc.rays + r;
@@ -157,7 +169,7 @@ __attribute__((target("avx2"))) SampleTotals lanes(const PartialSimSettings& s, 
   ts.lane_u.resize(phiz * Hz * R);
   for (std::size_t j = 0; j < phiz; ++j)
     for (std::size_t k = 0; k < Hz; ++k) {
-      ts.lane_delta[j * Hz + k] = s.ism_noise_logodds > 0.0f ? rng.uniform(-s.ism_noise_logodds, s.ism_noise_logodds) : 0.0f;
+      ts.lane_delta[j * Hz + k] = ism_noise(s, rng);
       for (std::size_t r = 0; r < R; ++r) ts.lane_u[(j * Hz + k) * R + r] = 1.0f - rng.uniform01();
     }
   ts.lane_rk.assign(phiz * Hz, 0.0f);
@@ -174,17 +186,17 @@ __attribute__((target("avx2"))) SampleTotals lanes(const PartialSimSettings& s, 
   for (std::size_t j0 = 0; j0 < phiz; j0 += 8) {
     const int n_lanes = static_cast<int>(std::min<std::size_t>(8, phiz - j0));
     const std::uint32_t all = (1u << n_lanes) - 1u;
-    const std::uint32_t stamp = ts.next_lanes_stamp(n_cells) << 16;
-    std::uint32_t* const ov = ts.lanes_overlay.data();
+    const std::uint32_t stamp = ts.lanes_overlay.next(n_cells, 0xFFFFu) << 16;
+    std::uint32_t* const ov = ts.lanes_overlay.word.data();
     for (int k = 0; k < H; ++k) {
       alignas(32) float lh[8], lm[8], rhn[8], rmn[8];
       for (int q = 0; q < 8; ++q) {  // lanes past n_lanes repeat the first: finite, never counted
         const std::size_t j = j0 + static_cast<std::size_t>(q < n_lanes ? q : 0);
-        const float delta = ts.lane_delta[j * Hz + static_cast<std::size_t>(k)];
-        lh[q] = s.hit_logodds + delta;  // line 14
-        lm[q] = s.miss_logodds + delta;
-        rhn[q] = 1.0f - et(std::clamp(lh[q], sc.l_min, sc.l_max));
-        rmn[q] = 1.0f - et(std::clamp(lm[q], sc.l_min, sc.l_max));
+        const IsmTerms ism(s, sc, ts.lane_delta[j * Hz + static_cast<std::size_t>(k)]);
+        lh[q] = ism.l_hit;
+        lm[q] = ism.l_miss;
+        rhn[q] = ism.r_hit_nan;
+        rmn[q] = ism.r_miss_nan;
       }
       const __m256 v_lh = _mm256_load_ps(lh), v_lm = _mm256_load_ps(lm), v_rhn = _mm256_load_ps(rhn), v_rmn = _mm256_load_ps(rmn);
       __m256 r_k = _mm256_setzero_ps(), r_unknown = _mm256_setzero_ps();
