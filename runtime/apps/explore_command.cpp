@@ -43,6 +43,7 @@ struct ExploreOptions {
   std::string profile = "dual";
   std::uint64_t seed = 1;
   double max_time = 600.0;
+  double stop_at_coverage = 0.0;
   std::string out = "out";
   std::string sensor_rate = "pipeline";
   int threads = 0;
@@ -70,6 +71,7 @@ struct CompareOptions {
   int seeds = 3;
   std::uint64_t first_seed = 1;
   double max_time = 600.0;
+  double stop_at_coverage = 0.0;
   std::string out = "out/compare";
   int threads = 0;
   bool quiet = false;
@@ -162,6 +164,7 @@ int run_explore(const ExploreOptions& o) {
   if (!o.start.empty()) sim::set_start(world, sim::parse_start(o.start), profile.chassis.radius_m, "--start");
   apply_strategy(profile, o.strategy);
   sim::ExploreSettings es = sim::explore_settings(profile, o.seed, o.max_time, rate);
+  es.stop_at_coverage = o.stop_at_coverage / 100.0;
   es.realtime = o.realtime;
   // Flags given on the command line override the profile; absent ones leave it.
   if (o.execution == "background" || (o.execution == "auto" && o.realtime)) es.runtime.execution = Execution::kBackground;
@@ -405,6 +408,7 @@ int run_compare(const CompareOptions& o) {
             Profile profile = resolve_profile(pname, over);
             apply_strategy(profile, strategy);
             sim::ExploreSettings es = sim::explore_settings(profile, seed, o.max_time, 0.0);
+            es.stop_at_coverage = o.stop_at_coverage / 100.0;
             sim::SimExplore run(worlds[w], std::move(profile), es);
             const std::string label = (worlds.size() > 1 ? world_names[w] + " " : std::string()) + variant + " seed " + std::to_string(seed) + ": ";
             stopped_by = run_to_end(run, o.quiet, tty, label, "the runs so far were saved");
@@ -448,6 +452,9 @@ void add_explore_command(CLI::App& app, int& exit_code) {
                   "present (the real robot's first pose, one line x y theta), else a free spot near the map's centre");
   cmd->add_option("-s,--seed", o->seed, "random seed (sensor and odometry noise, Procedure 1)")->capture_default_str();
   cmd->add_option("-t,--max-time", o->max_time, "simulated time limit [s]")->capture_default_str();
+  cmd->add_option("--stop-at-coverage", o->stop_at_coverage,
+                  "stop once the scored coverage of the world's reachable free area reaches this percentage (stop reason coverage_reached; for times to a coverage such as T_90 without running on to the end). Default: no such stop")
+      ->check(CLI::Range(0.0, 100.0).description("[0, 100] %, 0 = none"));
   cmd->add_option("-o,--out", o->out, "output folder")->capture_default_str();
   cmd->add_option("--sensor-rate", o->sensor_rate,
                   "render rate: pipeline (what the pipeline consumes: the map rate, 1 Hz - or vision's localization.visual_odometry.rate_hz, 5 Hz, when it is on), full (the profile's 30 Hz) or a rate in Hz")
@@ -507,6 +514,9 @@ void add_compare_command(CLI::App& app, int& exit_code) {
   cmd->add_option("-n,--seeds", o->seeds, "runs per profile")->capture_default_str();
   cmd->add_option("--first-seed", o->first_seed, "seed of the first run")->capture_default_str();
   cmd->add_option("-t,--max-time", o->max_time, "simulated time limit per run [s]")->capture_default_str();
+  cmd->add_option("--stop-at-coverage", o->stop_at_coverage,
+                  "stop once the scored coverage of the world's reachable free area reaches this percentage (stop reason coverage_reached; for times to a coverage such as T_90 without running on to the end). Default: no such stop")
+      ->check(CLI::Range(0.0, 100.0).description("[0, 100] %, 0 = none"));
   cmd->add_option("-o,--out", o->out, "output folder")->capture_default_str();
   cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "no progress output");

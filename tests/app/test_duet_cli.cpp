@@ -274,6 +274,11 @@ TEST(DuetCli, ExploreErrorsNameTheFileAndTheProblem) {
   r = run("explore -q --world lab --gyro-bias 0.5 --out " + (dir / "o").string());
   EXPECT_NE(r.code, 0);
   EXPECT_NE(r.output.find("--gyro-bias"), std::string::npos) << r.output;
+  for (const char* cmd : {"explore", "compare"}) {
+    r = run(std::string(cmd) + " -q --world lab --stop-at-coverage 150 --out " + (dir / "o").string());
+    EXPECT_NE(r.code, 0) << cmd;
+    EXPECT_NE(r.output.find("--stop-at-coverage"), std::string::npos) << cmd << ": " << r.output;
+  }
   EXPECT_FALSE(fs::exists(dir / "o" / "summary.json"));
 }
 

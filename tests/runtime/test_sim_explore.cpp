@@ -190,6 +190,40 @@ TEST(SimExplore, StopsAtTheTimeLimitAndSaysWhy) {
   EXPECT_FALSE(run.step());  // stopped stays stopped
 }
 
+// stop_at_coverage ends the run at the first coverage sample that reaches it - the sample a run
+// without the stop first reaches it at (lockstep: the same run up to there) - and says so.
+TEST(SimExplore, StopsWhenTheCoverageReachesTheStopAndSaysWhy) {
+  duet::sim::SimExplore full(two_rooms(), duet::builtin_profile("dual_kinect_kobuki"), settings(1, 60.0));
+  full.run();
+  double first = -1.0, before = 0.0;
+  for (const auto& p : full.curve())
+    if (p.coverage >= 0.3) {
+      first = p.t_s;
+      break;
+    } else {
+      before = p.coverage;
+    }
+  ASSERT_GT(first, 0.0) << "the full run never reached 30 %";
+  auto st = settings(1, 60.0);
+  st.stop_at_coverage = 0.3;
+  duet::sim::SimExplore stopped(two_rooms(), duet::builtin_profile("dual_kinect_kobuki"), st);
+  stopped.run();
+  const auto s = stopped.summary();
+  EXPECT_EQ(s.stop_reason, duet::sim::StopReason::kCoverageReached);
+  EXPECT_STREQ(duet::sim::to_string(s.stop_reason), "coverage_reached");
+  EXPECT_NEAR(s.sim_time_s, first, 1e-6);
+  ASSERT_GE(stopped.curve().size(), 2u);
+  EXPECT_GE(stopped.curve().back().coverage, 0.3);
+  EXPECT_DOUBLE_EQ(stopped.curve()[stopped.curve().size() - 2].coverage, before);
+  EXPECT_NE(s.stop_detail.find("reached the run's stop at 30.0 %"), std::string::npos) << s.stop_detail;
+  EXPECT_FALSE(stopped.step());
+
+  for (const double bad : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
+    st.stop_at_coverage = bad;
+    EXPECT_THROW(duet::sim::SimExplore(two_rooms(), duet::builtin_profile("dual_kinect_kobuki"), st), duet::Error) << bad;
+  }
+}
+
 // A collision's record names how near the robot's own map put an obstacle: the distance from
 // the estimated centre to the nearest occupied cell centre within the radius; free, unknown and
 // farther cells do not count; nothing (or a non-finite point) is infinity.

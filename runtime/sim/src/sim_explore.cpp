@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numbers>
 
@@ -43,6 +44,7 @@ const char* to_string(StopReason r) {
     case StopReason::kRunning: return "running";
     case StopReason::kExplorerDone: return "explorer_done";
     case StopReason::kTimeLimit: return "time_limit";
+    case StopReason::kCoverageReached: return "coverage_reached";
     case StopReason::kInterrupted: return "interrupted";
   }
   return "unknown";
@@ -70,6 +72,8 @@ void validate(const ExploreSettings& s) {
   auto bad = [](const std::string& what) { fail(ErrorCode::kInvalidArgument, "ExploreSettings::" + what); };
   if (!(std::isfinite(s.max_time_s) && s.max_time_s > 0.0 && s.max_time_s <= 1e6))
     bad("max_time_s must be in (0, 1e6] s, got " + std::to_string(s.max_time_s));
+  if (!(std::isfinite(s.stop_at_coverage) && s.stop_at_coverage >= 0.0 && s.stop_at_coverage <= 1.0))
+    bad("stop_at_coverage must be in [0, 1] (0 = never), got " + std::to_string(s.stop_at_coverage));
   if (!(std::isfinite(s.sensor_rate_hz) && s.sensor_rate_hz >= 0.0 && s.sensor_rate_hz <= 1000.0))
     bad("sensor_rate_hz must be in [0, 1000] Hz (0 = the map rate), got " + std::to_string(s.sensor_rate_hz));
   if (s.sensor_rate_hz > 0.0 && s.sensor_rate_hz < s.runtime.map_rate_hz)
@@ -228,14 +232,17 @@ bool SimExplore::step() {
   pose_error_max_ = std::max(pose_error_max_, static_cast<double>(std::hypot(runtime_->pose().x - truth.x, runtime_->pose().y - truth.y)));
   if (target_entered_ < 0.0 && world_->target_region && world_->target_region->contains({truth.x, truth.y}))
     target_entered_ = t_;
+  bool coverage_reached = false;
   if (t_ + 1e-9 >= next_curve_t_) {
     const CurvePoint p = measure();
     curve_.push_back(p);
     if (t90_ < 0.0 && p.coverage >= 0.9) t90_ = t_;
     if (t_paper_ < 0.0 && p.area_m2 >= kPaperAreaM2) t_paper_ = t_;
+    coverage_reached = settings_.stop_at_coverage > 0.0 && p.coverage >= settings_.stop_at_coverage;
     next_curve_t_ += settings_.curve_period_s;
   }
   if (runtime_->state() == ExplorerState::kDone) reason_ = StopReason::kExplorerDone;
+  else if (coverage_reached) reason_ = StopReason::kCoverageReached;
   else if (t_ + 1e-9 >= settings_.max_time_s) reason_ = StopReason::kTimeLimit;
   if (reason_ != StopReason::kRunning) finish();
   wall_elapsed_ = wall_.now_s();
@@ -330,7 +337,16 @@ ExploreSummary SimExplore::summary() const {
   s.seed = settings_.seed;
   s.stop_reason = reason_;
   if (runtime_->state() == ExplorerState::kDone) s.explorer_status = duet::to_string(runtime_->stop_status());
-  s.stop_detail = reason_ == StopReason::kInterrupted ? interrupt_detail_ : runtime_->stop_detail();
+  if (reason_ == StopReason::kInterrupted) {
+    s.stop_detail = interrupt_detail_;
+  } else if (reason_ == StopReason::kCoverageReached) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "coverage %.1f %% reached the run's stop at %.1f %%", 100.0 * curve_.back().coverage,
+                  100.0 * settings_.stop_at_coverage);
+    s.stop_detail = buf;
+  } else {
+    s.stop_detail = runtime_->stop_detail();
+  }
   s.explorer_state = duet::to_string(runtime_->state());
   s.left = runtime_->left_unexplored();
   s.sim_time_s = t_;

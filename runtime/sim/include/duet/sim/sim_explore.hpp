@@ -55,6 +55,10 @@ namespace duet::sim {
 struct ExploreSettings {
   std::uint64_t seed = 1;          ///< seeds the chassis noise, the sensor noise and Procedure 1
   double max_time_s = 900.0;       ///< stop after this much simulated time [s], (0, 1e6]
+  /// Stop once the scored coverage (CurvePoint::coverage, measured every curve_period_s)
+  /// reaches this fraction, [0, 1]; 0 = never. For measuring times to a coverage (T_90) without
+  /// running on to the end: such a run stops with StopReason::kCoverageReached.
+  double stop_at_coverage = 0.0;
   /// Sensor render rate [Hz]; 0 = the map rate (render only what the pipeline consumes, the
   /// default); the profile's rate (30 Hz) renders every frame a Kinect would give. [0, 1000]
   double sensor_rate_hz = 0.0;
@@ -112,6 +116,7 @@ enum class StopReason {
   kRunning,
   kExplorerDone,   ///< the explorer found nothing left to explore (see explorer_status)
   kTimeLimit,      ///< max_time_s reached
+  kCoverageReached,  ///< the scored coverage reached ExploreSettings::stop_at_coverage
   kInterrupted,    ///< interrupt() (e.g. SIGINT): stopped early, the run so far is complete and scored
 };
 [[nodiscard]] const char* to_string(StopReason r);
