@@ -16,7 +16,17 @@
 // fraction of decisions that gave a goal; p50_ms, p99_ms and max_ms: the spread of single
 // decisions' wall times; "cores_busy": the process's CPU time over the wall time while deciding
 // (2 = both threads of Decision/duet busy throughout).
+//
+// DistanceFields/{duet,duet_1t}/{lab,willow}: the three exact distance transforms of the whole
+// grid the runtime computes at every map update, on the same states: the planning costmap's
+// inflation (unknown space does not block), the local costmap's (it does) and the pose
+// corrector's distance to occupied cells (scan_match.hpp's occupied_distance). Time: their sum
+// per state (mean over the states). At stop 64 they were ~40 % of a late Willow run's CPU time
+// at -j 1 (perf).
 #include "bench_util.hpp"
+
+#include <duet/kernels/inflation.hpp>
+#include <duet/kernels/scan_match.hpp>
 
 #include <duet/runtime/config/profile.hpp>
 #include <duet/runtime/navigation/navigator.hpp>
@@ -78,17 +88,52 @@ const LoopStates* states(const std::string& name) {
   return willow.get();
 }
 
+/// The world's states, or nullptr after marking the benchmark skipped (no shared data).
+const LoopStates* states_or_skip(const std::string& world, benchmark::State& state) {
+  const LoopStates* s = states(world);
+  if (s && !s->states.empty()) return s;
+  state.SkipWithError("no states: ../shared/data/maps is absent");
+  return nullptr;
+}
+
 }  // namespace
 
+void register_distance_fields() {
+  for (const char* world : {"lab", "willow"})
+    for (const DuetImpl impl : kDuetImpls) {
+      benchmark::RegisterBenchmark(bench_name("DistanceFields", impl.name, world).c_str(), [impl, world](benchmark::State& state) {
+        const LoopStates* s = states_or_skip(world, state);
+        if (!s) return;
+        InflationSettings planning = s->profile.exploration.inflation, local = planning;
+        local.unknown_is_obstacle = true;
+        InflatedGrid a, b, c;
+        std::size_t cells = 0;
+        for (auto _ : state) {
+          for (const LoopState& st : s->states) {
+            const GridView v(st.grid);
+            arena(impl.threads).execute([&] {
+              inflate(v, planning, a);
+              inflate(v, local, b);
+              occupied_distance(v, s->profile.exploration.cells, c);
+            });
+            cells += v.cell_count();
+          }
+          benchmark::DoNotOptimize(c.clearance_m.data());
+        }
+        state.SetItemsProcessed(static_cast<std::int64_t>(cells));
+        state.counters["states"] = static_cast<double>(s->states.size());
+        state.SetLabel(std::string(world) + ": " + std::to_string(s->states.size()) + " states of a real run; time per pass over all");
+      })->Unit(benchmark::kMillisecond);
+    }
+}
+
 void register_decision_loop() {
+  register_distance_fields();
   for (const char* world : {"lab", "willow"})
     for (const DuetImpl impl : kDuetImpls) {
       benchmark::RegisterBenchmark(bench_name("Decision", impl.name, world).c_str(), [impl, world](benchmark::State& state) {
-        const LoopStates* s = states(world);
-        if (!s || s->states.empty()) {
-          state.SkipWithError("no states: ../shared/data/maps is absent");
-          return;
-        }
+        const LoopStates* s = states_or_skip(world, state);
+        if (!s) return;
         std::size_t goals = 0, decisions = 0;
         double cpu_s = 0.0, wall_s = 0.0;  // all decisions' process CPU time and wall time
         std::vector<double> ms;  // each decision's wall time: its spread over the states

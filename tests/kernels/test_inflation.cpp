@@ -124,6 +124,33 @@ TEST(Inflation, MatchesBruteForceOnRandomGrids) {
   }
 }
 
+// A grid whose squared distances in cells can pass 2^31 (50001 cells along one side) takes the
+// int64 path instead of the int32 / SSE2 one; both give the brute force's bits. Also a row of
+// blocked cells long enough for the runs inside it to be left out of the envelope.
+TEST(Inflation, LongGridsTakeTheWidePathAndMatchBruteForce) {
+  for (const auto& [w, h] : std::vector<std::pair<int, int>>{{50001, 1}, {1, 50001}, {46342, 2}, {300, 3}}) {
+    TestGrid g;
+    g.w = w;
+    g.h = h;
+    g.res = 0.05f;
+    g.l.assign(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), kFree);
+    const std::size_t n = g.l.size();
+    // Everything blocked lies near one end, so the far end is ~50000 cells away (2.5e9 squared).
+    g.l[3] = kOcc;
+    for (std::size_t i = 100; i < std::min<std::size_t>(n, 130); ++i) g.l[i] = kOcc;  // a run of blocked cells
+    g.l[std::min<std::size_t>(n - 1, 160)] = kNaN;  // unknown: blocks only with unknown_is_obstacle
+    for (const bool unk : {false, true}) {
+      InflationSettings s;
+      s.unknown_is_obstacle = unk;
+      s.robot_radius_m = 0.12f;
+      InflatedGrid out;
+      inflate(g.view(), s, out);
+      SCOPED_TRACE(::testing::Message() << w << "x" << h << " unknown_is_obstacle=" << unk);
+      expect_matches_reference(g, s, out);
+    }
+  }
+}
+
 TEST(Inflation, SingleObstacleGivesEuclideanDistances) {
   TestGrid g;
   g.w = 41;
