@@ -97,6 +97,7 @@ SimChassis::SimChassis(std::shared_ptr<const World> world, const ChassisSimSetti
                        const ChassisBody& body)
     : world_(std::move(world)), settings_(settings), body_(body), rng_(settings.seed) {
   if (!world_) fail(ErrorCode::kInvalidArgument, "SimChassis: world is null");
+  solids_ = SolidIndex(*world_);
   validate(settings_);
   validate(body_);
   if (!std::isfinite(start.x) || !std::isfinite(start.y) || !std::isfinite(start.theta))
@@ -128,12 +129,13 @@ SimChassis::SimChassis(std::shared_ptr<const World> world, const ChassisSimSetti
 void SimChassis::set_world(std::shared_ptr<const World> world) {
   if (!world) fail(ErrorCode::kInvalidArgument, "SimChassis::set_world: world is null");
   world_ = std::move(world);
+  solids_ = SolidIndex(*world_);
 }
 
 double SimChassis::normal() { return standard_normal(rng_); }
 
 bool SimChassis::collides_at(const Pose2& p, float extra_radius) const {
-  return collides(*world_, Eigen::Vector2f(p.x, p.y), body_.radius_m + extra_radius, body_.z_low_m, body_.z_high_m);
+  return solids_.collides(*world_, Eigen::Vector2f(p.x, p.y), body_.radius_m + extra_radius, body_.z_low_m, body_.z_high_m);
 }
 
 void SimChassis::command(const Twist& cmd) {

@@ -25,4 +25,11 @@ inline bool point_in_polygon(const std::vector<Eigen::Vector2f>& poly, const Eig
 
 inline bool height_overlaps(const Solid& s, float z_low, float z_high) { return s.z_max_m > z_low && s.z_min_m < z_high; }
 
+/// The polygon's axis-aligned bounding box.
+void bbox(const std::vector<Eigen::Vector2f>& poly, Eigen::Vector2f& lo, Eigen::Vector2f& hi);
+
+/// Whether a disc of radius r (r2 = r * r) centred at c overlaps the solid's polygon, whose
+/// bounding box is [lo, hi]: the test of overlapping_solid() and SolidIndex, one solid.
+bool disc_overlaps(const Solid& s, const Eigen::Vector2f& lo, const Eigen::Vector2f& hi, const Eigen::Vector2f& c, float r, float r2);
+
 }  // namespace duet::sim::world_detail

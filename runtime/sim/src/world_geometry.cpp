@@ -18,6 +18,7 @@ namespace duet::sim {
 namespace {
 
 using detail::format_number;
+using world_detail::bbox;
 using world_detail::height_overlaps;
 using world_detail::point_in_polygon;
 
@@ -37,7 +38,9 @@ float polygon_distance(const std::vector<Eigen::Vector2f>& poly, const Eigen::Ve
   return std::sqrt(best);
 }
 
-void bbox(const std::vector<Eigen::Vector2f>& poly, Eigen::Vector2f& lo, Eigen::Vector2f& hi) {
+}  // namespace
+
+void world_detail::bbox(const std::vector<Eigen::Vector2f>& poly, Eigen::Vector2f& lo, Eigen::Vector2f& hi) {
   lo = hi = poly.front();
   for (const auto& v : poly) {
     lo = lo.cwiseMin(v);
@@ -45,7 +48,14 @@ void bbox(const std::vector<Eigen::Vector2f>& poly, Eigen::Vector2f& lo, Eigen::
   }
 }
 
-}  // namespace
+bool world_detail::disc_overlaps(const Solid& s, const Eigen::Vector2f& lo, const Eigen::Vector2f& hi, const Eigen::Vector2f& c, float r,
+                                 float r2) {
+  if (c.x() + r < lo.x() || c.x() - r > hi.x() || c.y() + r < lo.y() || c.y() - r > hi.y()) return false;
+  if (point_in_polygon(s.polygon, c)) return true;
+  for (std::size_t i = 0, n = s.polygon.size(); i < n; ++i)
+    if (segment_distance_sq(s.polygon[i], s.polygon[(i + 1) % n], c) < r2) return true;
+  return false;
+}
 
 // ---------------------------------------------------------------------------------------------
 // Geometry queries.
@@ -56,12 +66,7 @@ const Solid* overlapping_solid(const World& world, const Eigen::Vector2f& centre
     if (!height_overlaps(s, z_low_m, z_high_m)) continue;
     Eigen::Vector2f lo, hi;
     bbox(s.polygon, lo, hi);
-    if (centre.x() + radius_m < lo.x() || centre.x() - radius_m > hi.x() || centre.y() + radius_m < lo.y() ||
-        centre.y() - radius_m > hi.y())
-      continue;
-    if (point_in_polygon(s.polygon, centre)) return &s;
-    for (std::size_t i = 0, n = s.polygon.size(); i < n; ++i)
-      if (segment_distance_sq(s.polygon[i], s.polygon[(i + 1) % n], centre) < r2) return &s;
+    if (world_detail::disc_overlaps(s, lo, hi, centre, radius_m, r2)) return &s;
   }
   return nullptr;
 }

@@ -42,6 +42,7 @@
 #include <duet/kernels/motion_model.hpp>
 #include <duet/runtime/config/profile.hpp>
 #include <duet/runtime/robot/robot_io.hpp>
+#include <duet/sim/solid_index.hpp>
 #include <duet/sim/world.hpp>
 
 #include <cstddef>
@@ -185,6 +186,7 @@ class SimChassis final : public ChassisInterface {
   [[nodiscard]] bool collides_at(const Pose2& p, float extra_radius) const;
 
   std::shared_ptr<const World> world_;
+  SolidIndex solids_;           ///< world_'s solids by place, for collides_at()
   ChassisSimSettings settings_;
   ChassisBody body_;
   double h_;                    ///< physics step [s]
