@@ -14,6 +14,7 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace duet {
@@ -111,23 +112,26 @@ static_assert(static_cast<int>(CellState::kFree) == 0 && static_cast<int>(CellSt
               "clearance_row's free test assumes these values");
 
 /// clearance = float(res * sqrt(double(d2))) and traversable = free && clearance > radius for
-/// one row, 4 cells at a time in SSE2 (exactly the scalar operations: int -> double is exact,
-/// sqrt and the products are IEEE-rounded the same way in either form).
-void clearance_row(const std::int32_t* d2, const CellState* st, int w, double res, float radius, float* cl, std::uint8_t* tr) {
-  const __m128d r = _mm_set1_pd(res);
-  const __m128 rad = _mm_set1_ps(radius);
+/// one row; with int32 distances 4 cells at a time in SSE2 (exactly the scalar operations: int ->
+/// double is exact, sqrt and the products are IEEE-rounded the same way in either form).
+template <typename D>
+void clearance_row(const D* d2, const CellState* st, int w, double res, float radius, float* cl, std::uint8_t* tr) {
   int x = 0;
-  for (; x + 4 <= w; x += 4) {
-    const __m128i d = _mm_loadu_si128(reinterpret_cast<const __m128i*>(d2 + x));
-    const __m128d lo = _mm_mul_pd(r, _mm_sqrt_pd(_mm_cvtepi32_pd(d)));
-    const __m128d hi = _mm_mul_pd(r, _mm_sqrt_pd(_mm_cvtepi32_pd(_mm_shuffle_epi32(d, 0xEE))));
-    const __m128 c = _mm_movelh_ps(_mm_cvtpd_ps(lo), _mm_cvtpd_ps(hi));
-    _mm_storeu_ps(cl + x, c);
-    std::uint32_t s;
-    std::memcpy(&s, st + x, 4);
-    const std::uint32_t free = ~(s | (s >> 1)) & 0x01010101u;  // 1 in the bytes that are kFree (0)
-    const std::uint32_t t = free & kMaskBytes[_mm_movemask_ps(_mm_cmpgt_ps(c, rad))];
-    std::memcpy(tr + x, &t, 4);
+  if constexpr (std::is_same_v<D, std::int32_t>) {
+    const __m128d r = _mm_set1_pd(res);
+    const __m128 rad = _mm_set1_ps(radius);
+    for (; x + 4 <= w; x += 4) {
+      const __m128i d = _mm_loadu_si128(reinterpret_cast<const __m128i*>(d2 + x));
+      const __m128d lo = _mm_mul_pd(r, _mm_sqrt_pd(_mm_cvtepi32_pd(d)));
+      const __m128d hi = _mm_mul_pd(r, _mm_sqrt_pd(_mm_cvtepi32_pd(_mm_shuffle_epi32(d, 0xEE))));
+      const __m128 c = _mm_movelh_ps(_mm_cvtpd_ps(lo), _mm_cvtpd_ps(hi));
+      _mm_storeu_ps(cl + x, c);
+      std::uint32_t s;
+      std::memcpy(&s, st + x, 4);
+      const std::uint32_t free = ~(s | (s >> 1)) & 0x01010101u;  // 1 in the bytes that are kFree (0)
+      const std::uint32_t t = free & kMaskBytes[_mm_movemask_ps(_mm_cmpgt_ps(c, rad))];
+      std::memcpy(tr + x, &t, 4);
+    }
   }
   for (; x < w; ++x) {
     const float c = static_cast<float>(res * std::sqrt(static_cast<double>(d2[x])));
@@ -213,12 +217,7 @@ void inflate(const GridView& grid, const InflationSettings& s, InflatedGrid& out
         clearance_row(d2n.data(), st + row, w, res, radius, cl + row, tr + row);
       } else {
         row_distances(cl + row, w, v.data(), F.data(), k, d2w.data());
-        for (int x = 0; x < w; ++x) {
-          const std::size_t i = row + static_cast<std::size_t>(x);
-          const float c = static_cast<float>(res * std::sqrt(static_cast<double>(d2w[x])));
-          cl[i] = c;
-          tr[i] = static_cast<std::uint8_t>(st[i] == CellState::kFree && c > radius);
-        }
+        clearance_row(d2w.data(), st + row, w, res, radius, cl + row, tr + row);
       }
     }
   });

@@ -439,6 +439,13 @@ int run_compare(const CompareOptions& o) {
   return stopped_by ? StopSignals::exit_code(stopped_by) : 0;
 }
 
+/// --stop-at-coverage, the same for `duet explore` and `duet compare` (percent; 0 = none).
+void add_stop_at_coverage(CLI::App& cmd, double& percent) {
+  cmd.add_option("--stop-at-coverage", percent,
+                 "stop once the scored coverage of the world's reachable free area reaches this percentage (stop reason coverage_reached; for times to a coverage such as T_90 without running on to the end). Default: no such stop")
+      ->check(CLI::Range(0.0, 100.0).description("[0, 100] %, 0 = none"));
+}
+
 }  // namespace
 
 void add_explore_command(CLI::App& app, int& exit_code) {
@@ -452,9 +459,7 @@ void add_explore_command(CLI::App& app, int& exit_code) {
                   "present (the real robot's first pose, one line x y theta), else a free spot near the map's centre");
   cmd->add_option("-s,--seed", o->seed, "random seed (sensor and odometry noise, Procedure 1)")->capture_default_str();
   cmd->add_option("-t,--max-time", o->max_time, "simulated time limit [s]")->capture_default_str();
-  cmd->add_option("--stop-at-coverage", o->stop_at_coverage,
-                  "stop once the scored coverage of the world's reachable free area reaches this percentage (stop reason coverage_reached; for times to a coverage such as T_90 without running on to the end). Default: no such stop")
-      ->check(CLI::Range(0.0, 100.0).description("[0, 100] %, 0 = none"));
+  add_stop_at_coverage(*cmd, o->stop_at_coverage);
   cmd->add_option("-o,--out", o->out, "output folder")->capture_default_str();
   cmd->add_option("--sensor-rate", o->sensor_rate,
                   "render rate: pipeline (what the pipeline consumes: the map rate, 1 Hz - or vision's localization.visual_odometry.rate_hz, 5 Hz, when it is on), full (the profile's 30 Hz) or a rate in Hz")
@@ -514,9 +519,7 @@ void add_compare_command(CLI::App& app, int& exit_code) {
   cmd->add_option("-n,--seeds", o->seeds, "runs per profile")->capture_default_str();
   cmd->add_option("--first-seed", o->first_seed, "seed of the first run")->capture_default_str();
   cmd->add_option("-t,--max-time", o->max_time, "simulated time limit per run [s]")->capture_default_str();
-  cmd->add_option("--stop-at-coverage", o->stop_at_coverage,
-                  "stop once the scored coverage of the world's reachable free area reaches this percentage (stop reason coverage_reached; for times to a coverage such as T_90 without running on to the end). Default: no such stop")
-      ->check(CLI::Range(0.0, 100.0).description("[0, 100] %, 0 = none"));
+  add_stop_at_coverage(*cmd, o->stop_at_coverage);
   cmd->add_option("-o,--out", o->out, "output folder")->capture_default_str();
   cmd->add_option("-j,--threads", o->threads, "worker threads (0 = all cores)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "no progress output");

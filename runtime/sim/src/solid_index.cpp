@@ -50,12 +50,7 @@ SolidIndex::SolidIndex(const World& world, float cell_m) : world_(&world), origi
 
 bool SolidIndex::collides(const World& world, const Eigen::Vector2f& centre, float radius_m, float z_low_m, float z_high_m) const {
   if (&world != world_) fail(ErrorCode::kInvalidArgument, "SolidIndex::collides: not the world the index was built for");
-  // The floor test of sim::collides().
-  const Region& f = world.floor;
-  if (!centre.allFinite()) return true;
-  if (centre.x() - radius_m < f.min.x() || centre.y() - radius_m < f.min.y() || centre.x() + radius_m > f.max.x() ||
-      centre.y() + radius_m > f.max.y())
-    return true;
+  if (world_detail::leaves_floor(world.floor, centre, radius_m)) return true;  // sim::collides()'s floor test
   if (!std::isfinite(radius_m)) return sim::collides(world, centre, radius_m, z_low_m, z_high_m);  // no cell range for it
   const float r2 = radius_m * radius_m;
   const int x0 = std::clamp(static_cast<int>(std::floor((centre.x() - radius_m - origin_.x()) / cell_m_)), 0, width_ - 1);

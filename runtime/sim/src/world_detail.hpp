@@ -25,6 +25,11 @@ inline bool point_in_polygon(const std::vector<Eigen::Vector2f>& poly, const Eig
 
 inline bool height_overlaps(const Solid& s, float z_low, float z_high) { return s.z_max_m > z_low && s.z_min_m < z_high; }
 
+/// collides()'s floor test: a non-finite centre, or a disc of radius r that reaches past the floor.
+inline bool leaves_floor(const Region& f, const Eigen::Vector2f& c, float r) {
+  return !c.allFinite() || c.x() - r < f.min.x() || c.y() - r < f.min.y() || c.x() + r > f.max.x() || c.y() + r > f.max.y();
+}
+
 /// The polygon's axis-aligned bounding box.
 void bbox(const std::vector<Eigen::Vector2f>& poly, Eigen::Vector2f& lo, Eigen::Vector2f& hi);
 

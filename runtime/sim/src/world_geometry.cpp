@@ -72,11 +72,7 @@ const Solid* overlapping_solid(const World& world, const Eigen::Vector2f& centre
 }
 
 bool collides(const World& world, const Eigen::Vector2f& centre, float radius_m, float z_low_m, float z_high_m) {
-  const Region& f = world.floor;
-  if (!centre.allFinite()) return true;
-  if (centre.x() - radius_m < f.min.x() || centre.y() - radius_m < f.min.y() || centre.x() + radius_m > f.max.x() ||
-      centre.y() + radius_m > f.max.y())
-    return true;
+  if (world_detail::leaves_floor(world.floor, centre, radius_m)) return true;
   return overlapping_solid(world, centre, radius_m, z_low_m, z_high_m) != nullptr;
 }
 
